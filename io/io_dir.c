@@ -1,0 +1,217 @@
+/* io_dir: natural-order listing of the PNG files of a folder, and small file
+ * helpers (mkdir of one level, whole-file read with a size limit). */
+#include "lsm_io.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+
+static int is_digit(char c) { return c >= '0' && c <= '9'; }
+
+int lsm_natural_cmp(const char *a, const char *b) {
+  const char *pa = a, *pb = b;
+  while (*pa && *pb) {
+    if (is_digit(*pa) && is_digit(*pb)) {
+      /* Compare digit runs by value: skip leading zeros, longer run is larger,
+       * equal lengths compare digit by digit. */
+      while (*pa == '0' && is_digit(pa[1])) ++pa;
+      while (*pb == '0' && is_digit(pb[1])) ++pb;
+      const char *ea = pa, *eb = pb;
+      while (is_digit(*ea)) ++ea;
+      while (is_digit(*eb)) ++eb;
+      size_t la = (size_t)(ea - pa), lb = (size_t)(eb - pb);
+      if (la != lb) return la < lb ? -1 : 1;
+      int c = memcmp(pa, pb, la);
+      if (c != 0) return c < 0 ? -1 : 1;
+      pa = ea;
+      pb = eb;
+      continue;
+    }
+    unsigned char ca = (unsigned char)*pa, cb = (unsigned char)*pb;
+    if (ca != cb) return ca < cb ? -1 : 1;
+    ++pa;
+    ++pb;
+  }
+  if (*pa || *pb) return *pa ? 1 : -1;
+  /* Equal in natural order ("01" vs "1"): plain strcmp makes the order total. */
+  int c = strcmp(a, b);
+  return c < 0 ? -1 : (c > 0 ? 1 : 0);
+}
+
+static const char *base_name(const char *path) {
+  const char *slash = strrchr(path, '/');
+  return slash ? slash + 1 : path;
+}
+
+static int cmp_paths(const void *a, const void *b) {
+  const char *pa = *(const char *const *)a, *pb = *(const char *const *)b;
+  return lsm_natural_cmp(base_name(pa), base_name(pb));
+}
+
+static int ends_with_png(const char *name) {
+  size_t n = strlen(name);
+  if (n < 4) return 0;
+  const char *e = name + n - 4;
+  return e[0] == '.' && (e[1] == 'p' || e[1] == 'P') && (e[2] == 'n' || e[2] == 'N') &&
+         (e[3] == 'g' || e[3] == 'G');
+}
+
+void lsm_path_list_free(char **paths, size_t count) {
+  if (!paths) return;
+  for (size_t i = 0; i < count; ++i) free(paths[i]);
+  free(paths);
+}
+
+lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, lsm_err *err) {
+  if (paths) *paths = NULL;
+  if (count) *count = 0;
+  if (!dir || !paths || !count) return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad arguments to the folder listing");
+
+  struct stat sb;
+  if (stat(dir, &sb) != 0) {
+    if (errno == ENOENT) return lsm_fail(err, LSM_ERR_INPUT, dir, "no such folder");
+    return lsm_fail(err, LSM_ERR_INPUT, dir, "cannot access folder: %s", strerror(errno));
+  }
+  if (!S_ISDIR(sb.st_mode)) return lsm_fail(err, LSM_ERR_INPUT, dir, "not a folder");
+  DIR *d = opendir(dir);
+  if (!d) return lsm_fail(err, LSM_ERR_INPUT, dir, "cannot open folder: %s", strerror(errno));
+
+  size_t dir_len = strlen(dir);
+  int need_slash = dir_len > 0 && dir[dir_len - 1] != '/';
+  char **list = NULL;
+  size_t n = 0, cap = 0;
+  lsm_status st = LSM_OK;
+  for (;;) {
+    errno = 0;
+    struct dirent *e = readdir(d);
+    if (!e) {
+      if (errno != 0) st = lsm_fail(err, LSM_ERR_IO, dir, "cannot read folder: %s", strerror(errno));
+      break;
+    }
+    const char *name = e->d_name;
+    if (name[0] == '.' || !ends_with_png(name)) continue;
+    size_t name_len = strlen(name);
+    size_t len = dir_len + (size_t)need_slash + name_len + 1;
+    char *path = malloc(len);
+    if (!path) {
+      st = lsm_fail(err, LSM_ERR_NOMEM, dir, "out of memory while listing the folder");
+      break;
+    }
+    memcpy(path, dir, dir_len);
+    if (need_slash) path[dir_len] = '/';
+    memcpy(path + dir_len + (size_t)need_slash, name, name_len + 1);
+
+    struct stat fs;
+    if (stat(path, &fs) != 0) {
+      if (errno == ENOENT || errno == ELOOP) { /* dangling link or vanished: skip */
+        free(path);
+        continue;
+      }
+      st = lsm_fail(err, LSM_ERR_INPUT, path, "cannot access: %s", strerror(errno));
+      free(path);
+      break;
+    }
+    if (!S_ISREG(fs.st_mode)) {
+      free(path);
+      continue;
+    }
+    if (n == cap) {
+      size_t new_cap = cap ? cap * 2 : 16, bytes;
+      char **grown = NULL;
+      if (new_cap > cap && lsm_size_mul(new_cap, sizeof *list, &bytes))
+        grown = realloc(list, bytes);
+      if (!grown) {
+        st = lsm_fail(err, LSM_ERR_NOMEM, dir, "out of memory while listing the folder");
+        free(path);
+        break;
+      }
+      list = grown;
+      cap = new_cap;
+    }
+    list[n++] = path;
+  }
+  closedir(d);
+  if (st != LSM_OK) {
+    lsm_path_list_free(list, n);
+    return st;
+  }
+  if (n > 1) qsort(list, n, sizeof *list, cmp_paths);
+  *paths = list;
+  *count = n;
+  return LSM_OK;
+}
+
+lsm_status lsm_make_dir(const char *path, lsm_err *err) {
+  if (!path || !*path) return lsm_fail(err, LSM_ERR_INPUT, NULL, "empty folder name");
+  if (mkdir(path, 0777) == 0) return LSM_OK;
+  int e = errno;
+  struct stat sb;
+  if (e == EEXIST) {
+    if (stat(path, &sb) == 0 && S_ISDIR(sb.st_mode)) return LSM_OK;
+    return lsm_fail(err, LSM_ERR_INPUT, path, "exists and is not a folder");
+  }
+  return lsm_fail(err, LSM_ERR_IO, path, "cannot create folder: %s", strerror(e));
+}
+
+lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t *length,
+                         lsm_err *err) {
+  if (data) *data = NULL;
+  if (length) *length = 0;
+  if (!path || !data) return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to read a file");
+  FILE *fp = fopen(path, "rb");
+  if (!fp) return lsm_fail(err, LSM_ERR_INPUT, path, "cannot open: %s", strerror(errno));
+  struct stat sb;
+  int have_stat = fstat(fileno(fp), &sb) == 0;
+  if (have_stat && S_ISDIR(sb.st_mode)) {
+    fclose(fp);
+    return lsm_fail(err, LSM_ERR_INPUT, path, "is a folder, not a file");
+  }
+
+  /* Read up to max_bytes + 1 so an oversized file is detected without
+   * trusting the size reported by stat (pipes, growing files). */
+  size_t cap = 4096, n = 0;
+  if (have_stat && S_ISREG(sb.st_mode) && sb.st_size >= 0 &&
+      (unsigned long long)sb.st_size < (unsigned long long)max_bytes)
+    cap = (size_t)sb.st_size + 2;
+  if (max_bytes < SIZE_MAX - 1 && cap > max_bytes + 2) cap = max_bytes + 2;
+  char *buf = malloc(cap);
+  lsm_status st = LSM_OK;
+  if (!buf) st = lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate %zu bytes", cap);
+  while (st == LSM_OK) {
+    if (n == cap - 1) { /* keep room for the terminating NUL */
+      if (n > max_bytes) break;
+      size_t new_cap = cap > SIZE_MAX / 2 ? SIZE_MAX : cap * 2;
+      if (max_bytes < SIZE_MAX - 1 && new_cap > max_bytes + 2) new_cap = max_bytes + 2;
+      char *grown = new_cap > cap ? realloc(buf, new_cap) : NULL;
+      if (!grown) {
+        st = lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate %zu bytes", new_cap);
+        break;
+      }
+      buf = grown;
+      cap = new_cap;
+    }
+    size_t got = fread(buf + n, 1, cap - 1 - n, fp);
+    n += got;
+    if (got == 0) {
+      if (ferror(fp)) st = lsm_fail(err, LSM_ERR_IO, path, "read error: %s", strerror(errno));
+      break;
+    }
+    if (n > max_bytes) break;
+  }
+  if (st == LSM_OK && n > max_bytes)
+    st = lsm_fail(err, LSM_ERR_LIMIT, path, "file is larger than the limit of %zu bytes", max_bytes);
+  if (fclose(fp) != 0 && st == LSM_OK)
+    st = lsm_fail(err, LSM_ERR_IO, path, "read error on close: %s", strerror(errno));
+  if (st != LSM_OK) {
+    free(buf);
+    return st;
+  }
+  buf[n] = '\0';
+  *data = buf;
+  if (length) *length = n;
+  return LSM_OK;
+}

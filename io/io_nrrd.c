@@ -1,0 +1,187 @@
+/* io_nrrd: streaming NRRD writer (attached header, raw little-endian float32).
+ *
+ * The header has a fixed length (NRRD_HEADER_BYTES): a padding comment line
+ * absorbs the difference between the provisional header written at open (slice
+ * count 0) and the final one written by lsm_nrrd_finish, which seeks back to
+ * offset 0 and rewrites it in place.
+ */
+#include "lsm_io.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NRRD_HEADER_BYTES 512
+
+struct lsm_nrrd_writer {
+  FILE *fp;
+  char *path;
+  int nx, ny;
+  double sx, sy, sz, ox, oy, oz;
+  size_t slices;
+  size_t slice_bytes;
+  unsigned char *buf; /* one slice, already little endian */
+  int failed;         /* a write failed: finish refuses */
+};
+
+/* Builds the exact NRRD_HEADER_BYTES-byte header into out (plus a NUL).
+ * Returns 0 if the fields do not fit (cannot happen with %.17g numbers). */
+static int nrrd_header(char out[NRRD_HEADER_BYTES + 1], const lsm_nrrd_writer *w, size_t nz,
+                       double sz) {
+  char body[NRRD_HEADER_BYTES + 1];
+  int len = snprintf(body, sizeof body,
+                     "NRRD0004\n"
+                     "# Complete NRRD file format specification at:\n"
+                     "# http://teem.sourceforge.net/nrrd/format.html\n"
+                     "# written by lsmorph\n"
+                     "type: float\n"
+                     "dimension: 3\n"
+                     "space dimension: 3\n"
+                     "sizes: %d %d %zu\n"
+                     "space directions: (%.17g,0,0) (0,%.17g,0) (0,0,%.17g)\n"
+                     "space origin: (%.17g,%.17g,%.17g)\n"
+                     "kinds: domain domain domain\n"
+                     "endian: little\n"
+                     "encoding: raw\n",
+                     w->nx, w->ny, nz, w->sx, w->sy, sz, w->ox, w->oy, w->oz);
+  /* then "# " + dots + "\n" + "\n" (the blank line that ends the header) */
+  if (len < 0 || (size_t)len + 4 > NRRD_HEADER_BYTES) return 0;
+  size_t pad = NRRD_HEADER_BYTES - (size_t)len - 4;
+  memcpy(out, body, (size_t)len);
+  char *p = out + len;
+  *p++ = '#';
+  *p++ = ' ';
+  memset(p, '.', pad);
+  p += pad;
+  *p++ = '\n';
+  *p++ = '\n';
+  *p = '\0';
+  return 1;
+}
+
+static int finite_positive(double v) { return isfinite(v) && v > 0.0; }
+
+lsm_status lsm_nrrd_open(const char *path, int nx, int ny, double sx, double sy,
+                         double sz, double ox, double oy, double oz,
+                         lsm_nrrd_writer **out, lsm_err *err) {
+  if (out) *out = NULL;
+  if (!path || !out) return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to the NRRD writer");
+  if (nx <= 0 || ny <= 0)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "volume slice size %dx%d is not positive", nx, ny);
+  if (!finite_positive(sx) || !finite_positive(sy) || !finite_positive(sz))
+    return lsm_fail(err, LSM_ERR_INPUT, path, "spacings %g %g %g must be finite and positive", sx,
+                    sy, sz);
+  if (!isfinite(ox) || !isfinite(oy) || !isfinite(oz))
+    return lsm_fail(err, LSM_ERR_INPUT, path, "origin %g %g %g is not finite", ox, oy, oz);
+  size_t slice_bytes;
+  if (!lsm_size_mul3((size_t)nx, (size_t)ny, 4, &slice_bytes))
+    return lsm_fail(err, LSM_ERR_LIMIT, path, "slice size %dx%d is too large", nx, ny);
+
+  lsm_nrrd_writer *w = calloc(1, sizeof *w);
+  if (!w) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate the NRRD writer");
+  size_t path_len = strlen(path);
+  w->path = malloc(path_len + 1);
+  w->buf = malloc(slice_bytes);
+  if (!w->path || !w->buf) {
+    free(w->path);
+    free(w->buf);
+    free(w);
+    return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate %zu bytes for a slice", slice_bytes);
+  }
+  memcpy(w->path, path, path_len + 1);
+  w->nx = nx;
+  w->ny = ny;
+  w->sx = sx;
+  w->sy = sy;
+  w->sz = sz;
+  w->ox = ox;
+  w->oy = oy;
+  w->oz = oz;
+  w->slice_bytes = slice_bytes;
+
+  char header[NRRD_HEADER_BYTES + 1];
+  if (!nrrd_header(header, w, 0, sz)) {
+    lsm_nrrd_abort(&w);
+    return lsm_fail(err, LSM_ERR_INTERNAL, path, "NRRD header does not fit in %d bytes",
+                    NRRD_HEADER_BYTES);
+  }
+  w->fp = fopen(path, "wb");
+  if (!w->fp) {
+    lsm_status st = lsm_fail(err, LSM_ERR_IO, path, "cannot create: %s", strerror(errno));
+    lsm_nrrd_abort(&w);
+    return st;
+  }
+  if (fwrite(header, 1, NRRD_HEADER_BYTES, w->fp) != NRRD_HEADER_BYTES) {
+    lsm_status st = lsm_fail(err, LSM_ERR_IO, path, "write failed: %s", strerror(errno));
+    lsm_nrrd_abort(&w);
+    return st;
+  }
+  *out = w;
+  return LSM_OK;
+}
+
+lsm_status lsm_nrrd_write_slice(lsm_nrrd_writer *w, const float *slice, lsm_err *err) {
+  if (!w || !slice) return lsm_fail(err, LSM_ERR_INTERNAL, w ? w->path : NULL, "bad arguments to write a slice");
+  if (w->failed) return lsm_fail(err, LSM_ERR_IO, w->path, "an earlier write failed");
+  size_t n = w->slice_bytes / 4;
+  unsigned char *b = w->buf;
+  for (size_t k = 0; k < n; ++k) {
+    uint32_t u;
+    memcpy(&u, &slice[k], sizeof u);
+    b[4 * k + 0] = (unsigned char)(u & 0xffu);
+    b[4 * k + 1] = (unsigned char)((u >> 8) & 0xffu);
+    b[4 * k + 2] = (unsigned char)((u >> 16) & 0xffu);
+    b[4 * k + 3] = (unsigned char)((u >> 24) & 0xffu);
+  }
+  if (fwrite(b, 1, w->slice_bytes, w->fp) != w->slice_bytes) {
+    w->failed = 1;
+    return lsm_fail(err, LSM_ERR_IO, w->path, "write failed: %s", strerror(errno));
+  }
+  w->slices++;
+  return LSM_OK;
+}
+
+size_t lsm_nrrd_slices(const lsm_nrrd_writer *w) { return w ? w->slices : 0; }
+
+lsm_status lsm_nrrd_finish(lsm_nrrd_writer **wp, double sz, lsm_err *err) {
+  if (!wp || !*wp) return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "NRRD writer is not open");
+  lsm_nrrd_writer *w = *wp;
+  lsm_status st = LSM_OK;
+  char header[NRRD_HEADER_BYTES + 1];
+  if (w->failed) {
+    st = lsm_fail(err, LSM_ERR_IO, w->path, "an earlier write failed");
+  } else if (w->slices == 0) {
+    st = lsm_fail(err, LSM_ERR_INPUT, w->path, "no slices were written");
+  } else if (!finite_positive(sz)) {
+    st = lsm_fail(err, LSM_ERR_INPUT, w->path, "z spacing %g must be finite and positive", sz);
+  } else if (!nrrd_header(header, w, w->slices, sz)) {
+    st = lsm_fail(err, LSM_ERR_INTERNAL, w->path, "NRRD header does not fit in %d bytes",
+                  NRRD_HEADER_BYTES);
+  } else if (fseek(w->fp, 0, SEEK_SET) != 0) {
+    st = lsm_fail(err, LSM_ERR_IO, w->path, "write failed: %s", strerror(errno));
+  } else if (fwrite(header, 1, NRRD_HEADER_BYTES, w->fp) != NRRD_HEADER_BYTES ||
+             fflush(w->fp) != 0 || ferror(w->fp)) {
+    st = lsm_fail(err, LSM_ERR_IO, w->path, "write failed: %s", strerror(errno));
+  } else {
+    w->sz = sz;
+  }
+  int closed = fclose(w->fp);
+  int close_errno = errno;
+  w->fp = NULL;
+  if (closed != 0 && st == LSM_OK)
+    st = lsm_fail(err, LSM_ERR_IO, w->path, "write failed on close: %s", strerror(close_errno));
+  lsm_nrrd_abort(wp);
+  return st;
+}
+
+void lsm_nrrd_abort(lsm_nrrd_writer **wp) {
+  if (!wp || !*wp) return;
+  lsm_nrrd_writer *w = *wp;
+  if (w->fp) fclose(w->fp);
+  free(w->buf);
+  free(w->path);
+  free(w);
+  *wp = NULL;
+}

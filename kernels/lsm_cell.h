@@ -1,0 +1,217 @@
+/* lsm_cell.h — per-cell numerics of lsmorph, written once.
+ *
+ * Pure functions of plain values: no memory access patterns, no I/O, no
+ * globals.  The scalar C path (solver/lsm_scheme.c, solver/lsm_reinit.c) and
+ * the OpenCL kernels (kernels/ *.cl files) both include this file, so both run the
+ * same arithmetic.  All quantities are float; lengths in physical units.
+ *
+ * Notation (Osher & Fedkiw 2003, ch. 3–5):
+ *   dxm = (phi[i] - phi[i-1]) / dx   backward difference  (phi_x^-)
+ *   dxp = (phi[i+1] - phi[i]) / dx   forward difference   (phi_x^+)
+ *   dym, dyp likewise along y.
+ * The morph equation (Nilsson, Breen & Museth 2005; METHOD.md §2) is
+ *   phi_t + F |grad phi| = 0,   F = phi - phi_target,
+ * with Hamiltonian H(p, q) = F sqrt(p^2 + q^2),
+ *   H1 = dH/dp = F p / |(p, q)|,   H2 = dH/dq = F q / |(p, q)|.
+ */
+#ifndef LSM_CELL_H
+#define LSM_CELL_H
+
+#ifdef __OPENCL_VERSION__
+#define LSM_FN inline
+#define LSM_SQRT(x) sqrt(x)
+#define LSM_FABS(x) fabs(x)
+#define LSM_PRIV __private
+#else
+#include <math.h>
+#define LSM_FN static inline
+#define LSM_SQRT(x) sqrtf(x)
+#define LSM_FABS(x) fabsf(x)
+#define LSM_PRIV
+#endif
+
+/* Branch-free max/min that compilers vectorise (no NaN semantics needed:
+ * callers never pass NaN; a NaN in phi is caught by the driver). */
+LSM_FN float lsm_maxf(float a, float b) { return a > b ? a : b; }
+LSM_FN float lsm_minf(float a, float b) { return a < b ? a : b; }
+
+/* ---- First-order Godunov upwind (Osher & Sethian 1988) ------------------------
+ * Numerical Hamiltonian for F |grad phi| with the speed F known at the cell:
+ *   F > 0: |grad phi|^2 ~ max(dxm,0)^2 + min(dxp,0)^2 + max(dym,0)^2 + min(dyp,0)^2
+ *   F < 0: |grad phi|^2 ~ min(dxm,0)^2 + max(dxp,0)^2 + min(dym,0)^2 + max(dyp,0)^2 */
+LSM_FN float lsm_upwind_hamiltonian(float F, float dxm, float dxp, float dym, float dyp) {
+  float ax = lsm_maxf(dxm, 0.0f), bx = lsm_minf(dxp, 0.0f);
+  float ay = lsm_maxf(dym, 0.0f), by = lsm_minf(dyp, 0.0f);
+  float cx = lsm_minf(dxm, 0.0f), ex = lsm_maxf(dxp, 0.0f);
+  float cy = lsm_minf(dym, 0.0f), ey = lsm_maxf(dyp, 0.0f);
+  float grad_pos = LSM_SQRT(ax * ax + bx * bx + ay * ay + by * by);
+  float grad_neg = LSM_SQRT(cx * cx + ex * ex + cy * cy + ey * ey);
+  return F > 0.0f ? F * grad_pos : F * grad_neg;
+}
+
+/* ---- CFL rate (METHOD.md §3.4) --------------------------------------------------
+ * max over the four one-sided combinations (p in {dxm,dxp}, q in {dym,dyp}) of
+ *   |H1|/dx + |H2|/dy = |F| (|p|/dx + |q|/dy) / |(p,q)|.
+ * The stable step is dt = cfl / max over the grid of this rate. */
+LSM_FN float lsm_cfl_pair(float p, float q, float inv_dx, float inv_dy) {
+  float g = LSM_SQRT(p * p + q * q);
+  return g > 0.0f ? (LSM_FABS(p) * inv_dx + LSM_FABS(q) * inv_dy) / g : 0.0f;
+}
+LSM_FN float lsm_cfl_rate(float F, float dxm, float dxp, float dym, float dyp, float inv_dx,
+                          float inv_dy) {
+  float r = lsm_maxf(lsm_maxf(lsm_cfl_pair(dxm, dym, inv_dx, inv_dy),
+                              lsm_cfl_pair(dxm, dyp, inv_dx, inv_dy)),
+                     lsm_maxf(lsm_cfl_pair(dxp, dym, inv_dx, inv_dy),
+                              lsm_cfl_pair(dxp, dyp, inv_dx, inv_dy)));
+  return LSM_FABS(F) * r;
+}
+
+/* ---- Roe-Fix (Osher & Fedkiw ch. 5.3; the design document's Algorithm 3.1) -------
+ * Inputs are the one-sided differences on a +-3 cell stencil:
+ *   xm[k] = phi_x^- at column i-3+k, xp[k] = phi_x^+ at column i-3+k (k = 0..6),
+ *   ym[k], yp[k] likewise along the column; index 3 is the cell itself.
+ * I_x = {xm[3], xp[3]}, I_x_new = {xm[k], xp[k] : k = 0..6} (same for y).
+ *   1. If H1 and H2 each keep one sign over I_x x I_y: pure upwind, no dissipation.
+ *   2. Otherwise, with H1 over I_x x I_y_new and H2 over I_x_new x I_y:
+ *      H1 one-signed, H2 not: phi_x* upwind, phi_y* = mean, alpha_y = max|H2|;
+ *      H2 one-signed, H1 not: symmetric;
+ *      neither: both means, alpha_x = max|H1|, alpha_y = max|H2|.
+ *   Hhat = H(phi_x*, phi_y*) - alpha_x (xp - xm)/2 - alpha_y (yp - ym)/2.
+ * "One sign" allows zeros (all >= 0 or all <= 0). */
+
+/* Sign flags of H1 = F p / |(p,q)| over p in P (np values) x q in Q (nq values),
+ * and the largest |H1|.  Works for H2 too with the roles of p and q swapped. */
+LSM_FN void lsm_roefix_scan(float F, const LSM_PRIV float *P, int np, const LSM_PRIV float *Q,
+                            int nq, LSM_PRIV int *has_pos, LSM_PRIV int *has_neg,
+                            LSM_PRIV float *max_abs) {
+  int pos = 0, neg = 0;
+  float m = 0.0f;
+  for (int a = 0; a < np; ++a) {
+    for (int b = 0; b < nq; ++b) {
+      float g = LSM_SQRT(P[a] * P[a] + Q[b] * Q[b]);
+      float h = g > 0.0f ? F * P[a] / g : 0.0f;
+      pos |= h > 0.0f;
+      neg |= h < 0.0f;
+      m = lsm_maxf(m, LSM_FABS(h));
+    }
+  }
+  *has_pos = pos;
+  *has_neg = neg;
+  *max_abs = m;
+}
+
+/* Which flags (reason codes) the Roe-Fix step took; tests check each branch. */
+enum {
+  LSM_ROEFIX_UPWIND = 0,      /* both one-signed on the narrow sets */
+  LSM_ROEFIX_LLF_Y = 1,       /* H1 one-signed, H2 not (dissipation in y) */
+  LSM_ROEFIX_LLF_X = 2,       /* H2 one-signed, H1 not (dissipation in x) */
+  LSM_ROEFIX_LLF_XY = 3       /* neither one-signed */
+};
+
+LSM_FN float lsm_roefix_hamiltonian_ex(float F, const LSM_PRIV float *xm, const LSM_PRIV float *xp,
+                                       const LSM_PRIV float *ym, const LSM_PRIV float *yp,
+                                       LSM_PRIV int *branch) {
+  float Ix[2] = {xm[3], xp[3]}, Iy[2] = {ym[3], yp[3]};
+  int p1, n1, p2, n2;
+  float m1, m2;
+  lsm_roefix_scan(F, Ix, 2, Iy, 2, &p1, &n1, &m1);
+  lsm_roefix_scan(F, Iy, 2, Ix, 2, &p2, &n2, &m2);
+  float px, py, alpha_x = 0.0f, alpha_y = 0.0f;
+  if (!(p1 && n1) && !(p2 && n2)) {
+    px = p1 ? xm[3] : xp[3];
+    py = p2 ? ym[3] : yp[3];
+    *branch = LSM_ROEFIX_UPWIND;
+  } else {
+    float Ixw[14], Iyw[14];
+    for (int k = 0; k < 7; ++k) {
+      Ixw[2 * k] = xm[k];
+      Ixw[2 * k + 1] = xp[k];
+      Iyw[2 * k] = ym[k];
+      Iyw[2 * k + 1] = yp[k];
+    }
+    lsm_roefix_scan(F, Ix, 2, Iyw, 14, &p1, &n1, &m1); /* H1 over I_x x I_y_new */
+    lsm_roefix_scan(F, Iy, 2, Ixw, 14, &p2, &n2, &m2); /* H2 over I_x_new x I_y */
+    int one1 = !(p1 && n1), one2 = !(p2 && n2);
+    if (one1 && !one2) {
+      px = p1 ? xm[3] : xp[3];
+      py = 0.5f * (ym[3] + yp[3]);
+      alpha_y = m2;
+      *branch = LSM_ROEFIX_LLF_Y;
+    } else if (one2 && !one1) {
+      px = 0.5f * (xm[3] + xp[3]);
+      py = p2 ? ym[3] : yp[3];
+      alpha_x = m1;
+      *branch = LSM_ROEFIX_LLF_X;
+    } else if (!one1 && !one2) {
+      px = 0.5f * (xm[3] + xp[3]);
+      py = 0.5f * (ym[3] + yp[3]);
+      alpha_x = m1;
+      alpha_y = m2;
+      *branch = LSM_ROEFIX_LLF_XY;
+    } else {
+      /* Both one-signed once widened: only possible through zero gradients;
+       * the narrow-set choice stands. */
+      px = p1 ? xm[3] : xp[3];
+      py = p2 ? ym[3] : yp[3];
+      *branch = LSM_ROEFIX_UPWIND;
+    }
+  }
+  return F * LSM_SQRT(px * px + py * py) - alpha_x * 0.5f * (xp[3] - xm[3]) -
+         alpha_y * 0.5f * (yp[3] - ym[3]);
+}
+
+LSM_FN float lsm_roefix_hamiltonian(float F, const LSM_PRIV float *xm, const LSM_PRIV float *xp,
+                                    const LSM_PRIV float *ym, const LSM_PRIV float *yp) {
+  int branch;
+  return lsm_roefix_hamiltonian_ex(F, xm, xp, ym, yp, &branch);
+}
+
+/* ---- Reinitialisation (Russo & Smereka 2000) -------------------------------------
+ * phi_tau + S(phi0) (|grad phi| - 1) = 0 with the subcell fix: cells whose sign
+ * differs from a 4-neighbour's in phi0 keep the interface where phi0 put it. */
+
+/* Godunov |grad phi| for the eikonal part, upwind by the sign of phi0. */
+LSM_FN float lsm_godunov_grad(float s, float dxm, float dxp, float dym, float dyp) {
+  float gx, gy;
+  if (s > 0.0f) {
+    float a = lsm_maxf(dxm, 0.0f), b = lsm_minf(dxp, 0.0f);
+    float c = lsm_maxf(dym, 0.0f), d = lsm_minf(dyp, 0.0f);
+    gx = lsm_maxf(a * a, b * b);
+    gy = lsm_maxf(c * c, d * d);
+  } else {
+    float a = lsm_minf(dxm, 0.0f), b = lsm_maxf(dxp, 0.0f);
+    float c = lsm_minf(dym, 0.0f), d = lsm_maxf(dyp, 0.0f);
+    gx = lsm_maxf(a * a, b * b);
+    gy = lsm_maxf(c * c, d * d);
+  }
+  return LSM_SQRT(gx + gy);
+}
+
+/* One explicit pseudo-time step of size dtau for a cell.
+ *   phi, phi0           the cell's current and initial values
+ *   l0, r0, d0, u0      phi0 at the 4 neighbours (x-1, x+1, y-1, y+1)
+ *   dxm..dyp            one-sided differences of the current phi
+ * Far cells: Godunov.  Interface cells (sign change in phi0): Russo–Smereka
+ *   phi <- phi - (dtau/h) (sgn(phi0) |phi| - D),  D = phi0 / |grad phi0|_est,
+ * |grad phi0|_est = max(central gradient, one-sided slopes, eps). */
+LSM_FN float lsm_reinit_cell(float phi, float phi0, float l0, float r0, float d0, float u0,
+                             float dxm, float dxp, float dym, float dyp, float inv_dx,
+                             float inv_dy, float h, float dtau) {
+  int interface = (phi0 * l0 < 0.0f) | (phi0 * r0 < 0.0f) | (phi0 * d0 < 0.0f) |
+                  (phi0 * u0 < 0.0f) | (phi0 == 0.0f);
+  float s = phi0 > 0.0f ? 1.0f : (phi0 < 0.0f ? -1.0f : 0.0f);
+  if (interface) {
+    float cx = 0.5f * (r0 - l0) * inv_dx, cy = 0.5f * (u0 - d0) * inv_dy;
+    float g = LSM_SQRT(cx * cx + cy * cy);
+    g = lsm_maxf(g, LSM_FABS(r0 - phi0) * inv_dx);
+    g = lsm_maxf(g, LSM_FABS(phi0 - l0) * inv_dx);
+    g = lsm_maxf(g, LSM_FABS(u0 - phi0) * inv_dy);
+    g = lsm_maxf(g, LSM_FABS(phi0 - d0) * inv_dy);
+    g = lsm_maxf(g, 1e-6f);
+    float D = phi0 / g;
+    return phi - (dtau / h) * (s * LSM_FABS(phi) - D);
+  }
+  return phi - dtau * s * (lsm_godunov_grad(s, dxm, dxp, dym, dyp) - 1.0f);
+}
+
+#endif

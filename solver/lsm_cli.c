@@ -1,0 +1,328 @@
+#include "lsm_cli.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char general_help[] =
+    "lsmorph " LSM_VERSION " - fill the gaps between sparse parallel slices by level-set morphing\n"
+    "\n"
+    "Usage:\n"
+    "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
+    "  lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
+    "  lsmorph --help | --version | help COMMAND\n"
+    "\n"
+    "Commands:\n"
+    "  reconstruct   read PNG slices, morph between consecutive slices, write a volume\n"
+    "  score         compare a reconstruction with full-resolution truth slices\n"
+    "\n"
+    "Run 'lsmorph help reconstruct' for the options.\n";
+
+static const char reconstruct_help[] =
+    "Usage: lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
+    "\n"
+    "Reads the PNG files of SLICE_DIR in natural order (2.png before 10.png), one slice\n"
+    "each, evolves each slice into the next with phi_t + (phi - phi_target)|grad phi| = 0,\n"
+    "and writes the stacked slices to OUT_DIR.\n"
+    "\n"
+    "Input:\n"
+    "  --input mask|outline   mask: filled regions (default); outline: thin closed\n"
+    "                         8-connected contours, inside found by parity (nested\n"
+    "                         contours, holes, islands in holes)\n"
+    "  --invert               foreground is dark (default: luminance >= 50 %)\n"
+    "  --spacing Z            distance between consecutive slices (default 1)\n"
+    "  --heights FILE         one height per slice, strictly increasing (overrides --spacing)\n"
+    "  --pixel-size S         physical size of a pixel (default 1); all distances,\n"
+    "                         heights and the output signed distance use this unit\n"
+    "  --max-pixels N         refuse slices with more pixels (default 268435456)\n"
+    "\n"
+    "Output:\n"
+    "  --dz Z                 output slice spacing (default: the pixel size, isotropic\n"
+    "                         voxels); output heights are z0, z0+dz, ... up to the last\n"
+    "                         input height; input heights on that grid get their input\n"
+    "                         slice back exactly\n"
+    "  --per-iteration        the design document's mode: every solver iteration of\n"
+    "                         every pair is a slice, heights by linspace per pair\n"
+    "  --no-slices            do not write slices/*.png\n"
+    "\n"
+    "Method:\n"
+    "  --method ls|blend      ls: level-set morph (default); blend: linear interpolation\n"
+    "                         of the two signed distance functions\n"
+    "  --scheme upwind|roe-fix  numerical Hamiltonian (default upwind: first-order\n"
+    "                         Godunov; roe-fix: Algorithm 3.1 of the design document)\n"
+    "  --time euler|rk2|rk3   time integrator (default euler; rk2/rk3: TVD Runge-Kutta)\n"
+    "  --cfl C                CFL number, 0 < C (default 0.75)\n"
+    "  --reinit-every N       reinitialise phi to a signed distance every N steps\n"
+    "                         (default 0 = never, as in the design document)\n"
+    "  --reinit-iters N       pseudo-time iterations per reinitialisation (default 10)\n"
+    "  --tol T                per-iteration mode: stop a pair when\n"
+    "                         CP = | ||phi^n - phi_T|| - ||phi^(n-1) - phi_T|| | <= T\n"
+    "                         (default 0.25; the norm is over all cells, so CP grows\n"
+    "                         with the square root of the cell count: scale T with it)\n"
+    "  --max-iter N           most solver steps per pair (default 100000)\n"
+    "  --align hull|none      hull (default): move each slice's convex-hull centroid to\n"
+    "                         the image centre before morphing and move intermediate\n"
+    "                         slices back along the straight line between the centroids\n"
+    "\n"
+    "Running:\n"
+    "  --threads N            threads for the grid loops (default: all cores)\n"
+    "  -q, --quiet            no progress or notes on stderr\n"
+    "\n"
+    "Files written to OUT_DIR:\n"
+    "  volume.nrrd            float32 signed distance (negative inside) of every output\n"
+    "                         slice, x fastest, spacings in physical units\n"
+    "  heights.txt            the height of each output slice, one per line\n"
+    "  slices/00001.png ...   binary mask of each output slice (255 inside)\n"
+    "  run.json               options, per-pair iterations, dt, CP, seconds, cells; totals\n"
+    "\n"
+    "Exit status: 0 success, 1 bad input or failure, 2 usage error.\n";
+
+static const char score_help[] =
+    "Usage: lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
+    "\n"
+    "Scores a reconstruction made from every K-th slice of TRUTH_DIR (the 1st,\n"
+    "(K+1)-th, ... in natural order, with --spacing 1) against the slices left out:\n"
+    "OUT_DIR/slices/N.png is compared with the N-th truth slice for every N that was\n"
+    "not an input.  Prints one JSON object: mean Dice, mean 95 % Hausdorff distance\n"
+    "(pixels, symmetric, between boundary pixels), mean surface distance, and the\n"
+    "relative volume error over all held-out slices.\n";
+
+void lsm_cli_help(FILE *f, const char *topic) {
+  if (topic && strcmp(topic, "reconstruct") == 0)
+    fputs(reconstruct_help, f);
+  else if (topic && strcmp(topic, "score") == 0)
+    fputs(score_help, f);
+  else
+    fputs(general_help, f);
+}
+
+/* ---- value parsers ---------------------------------------------------------------- */
+
+static lsm_status parse_double(const char *opt, const char *text, double *out, int positive,
+                               lsm_err *err) {
+  char *end = NULL;
+  errno = 0;
+  double v = strtod(text, &end);
+  if (end == text || *end != '\0' || errno == ERANGE || !isfinite(v))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: '%s' is not a number", opt, text);
+  if (positive && !(v > 0.0))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: %s must be positive", opt, text);
+  *out = v;
+  return LSM_OK;
+}
+
+static lsm_status parse_int(const char *opt, const char *text, long min, long max, long *out,
+                            lsm_err *err) {
+  char *end = NULL;
+  errno = 0;
+  long v = strtol(text, &end, 10);
+  if (end == text || *end != '\0' || errno == ERANGE)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: '%s' is not an integer", opt, text);
+  if (v < min || v > max)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: %ld is out of range [%ld, %ld]", opt, v, min,
+                    max);
+  *out = v;
+  return LSM_OK;
+}
+
+/* ---- the parser ---------------------------------------------------------------------- */
+
+typedef struct arg_cursor {
+  int argc, i;
+  char **argv;
+} arg_cursor;
+
+/* The value of an option: "--opt=value" or "--opt value". */
+static lsm_status take_value(arg_cursor *c, const char *opt, const char *inline_value,
+                             const char **out, lsm_err *err) {
+  if (inline_value) {
+    *out = inline_value;
+    return LSM_OK;
+  }
+  if (c->i + 1 >= c->argc)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s needs a value", opt);
+  *out = c->argv[++c->i];
+  return LSM_OK;
+}
+
+static void cli_defaults(lsm_cli *cli) {
+  memset(cli, 0, sizeof *cli);
+  cli->spacing = 1.0;
+  cli->max_pixels = (uint64_t)1 << 28;
+  cli->write_slices = 1;
+  lsm_stack_opts_default(&cli->stack);
+}
+
+static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
+  lsm_stack_opts *so = &cli->stack;
+  for (; c->i < c->argc; ++c->i) {
+    const char *arg = c->argv[c->i];
+    if (arg[0] != '-' || strcmp(arg, "-") == 0) {
+      if (cli->slice_dir)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "unexpected argument '%s' (one SLICE_DIR only)", arg);
+      cli->slice_dir = arg;
+      continue;
+    }
+    /* Split "--name=value". */
+    char name[64];
+    const char *eq = strchr(arg, '=');
+    const char *inline_value = NULL;
+    size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+    if (len >= sizeof name) return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s'", arg);
+    memcpy(name, arg, len);
+    name[len] = '\0';
+    if (eq) inline_value = eq + 1;
+    const char *v = NULL;
+    long n;
+#define NEEDS_VALUE() LSM_TRY(take_value(c, name, inline_value, &v, err))
+#define IS(s) (strcmp(name, (s)) == 0)
+    if (IS("-h") || IS("--help")) {
+      cli->command = LSM_CMD_HELP;
+      cli->help_topic = "reconstruct";
+      return LSM_OK;
+    } else if (IS("-o") || IS("--output")) {
+      NEEDS_VALUE();
+      cli->out_dir = v;
+    } else if (IS("--input")) {
+      NEEDS_VALUE();
+      if ((so->input = lsm_input_from_name(v)) == LSM_INPUT_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--input: '%s' is not one of mask, outline", v);
+    } else if (IS("--invert")) {
+      cli->invert = 1;
+    } else if (IS("--spacing")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_double(name, v, &cli->spacing, 1, err));
+    } else if (IS("--heights")) {
+      NEEDS_VALUE();
+      cli->heights_file = v;
+    } else if (IS("--pixel-size")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_double(name, v, &so->pixel_size, 1, err));
+    } else if (IS("--dz")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_double(name, v, &so->dz, 1, err));
+    } else if (IS("--per-iteration")) {
+      so->per_iteration = 1;
+    } else if (IS("--no-slices")) {
+      cli->write_slices = 0;
+    } else if (IS("--method")) {
+      NEEDS_VALUE();
+      if ((so->method = lsm_method_from_name(v)) == LSM_METHOD_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--method: '%s' is not one of ls, blend", v);
+    } else if (IS("--scheme")) {
+      NEEDS_VALUE();
+      if ((so->morph.scheme = lsm_scheme_from_name(v)) == LSM_SCHEME_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--scheme: '%s' is not one of upwind, roe-fix", v);
+    } else if (IS("--time")) {
+      NEEDS_VALUE();
+      if ((so->morph.time = lsm_time_from_name(v)) == LSM_TIME_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--time: '%s' is not one of euler, rk2, rk3", v);
+    } else if (IS("--cfl")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_double(name, v, &so->morph.cfl, 1, err));
+    } else if (IS("--reinit-every")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 0, INT_MAX, &n, err));
+      so->morph.reinit_every = (int)n;
+    } else if (IS("--reinit-iters")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 1, 100000, &n, err));
+      so->morph.reinit_iters = (int)n;
+    } else if (IS("--tol")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_double(name, v, &so->tol, 1, err));
+    } else if (IS("--max-iter")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 1, INT_MAX, &n, err));
+      so->max_iter = (int)n;
+    } else if (IS("--align")) {
+      NEEDS_VALUE();
+      if ((so->align = lsm_align_from_name(v)) == LSM_ALIGN_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--align: '%s' is not one of hull, none", v);
+    } else if (IS("--threads")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 1, 4096, &n, err));
+      cli->threads = (int)n;
+    } else if (IS("--max-pixels")) {
+      NEEDS_VALUE();
+      double d;
+      LSM_TRY(parse_double(name, v, &d, 1, err));
+      if (d > 9.0e15 || d != floor(d))
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-pixels: '%s' is not a whole number of pixels", v);
+      cli->max_pixels = (uint64_t)d;
+    } else if (IS("-q") || IS("--quiet")) {
+      cli->quiet = 1;
+    } else {
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s' (see 'lsmorph help reconstruct')", arg);
+    }
+    if (inline_value && !v)
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes no value", name);
+#undef NEEDS_VALUE
+#undef IS
+  }
+  if (!cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing SLICE_DIR");
+  if (!cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing -o OUT_DIR");
+  if (so->per_iteration && so->method == LSM_METHOD_BLEND)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs --method ls");
+  return LSM_OK;
+}
+
+static lsm_status parse_score(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
+  for (; c->i < c->argc; ++c->i) {
+    const char *arg = c->argv[c->i];
+    if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
+      cli->command = LSM_CMD_HELP;
+      cli->help_topic = "score";
+      return LSM_OK;
+    } else if (strncmp(arg, "--stride", 8) == 0 && (arg[8] == '\0' || arg[8] == '=')) {
+      const char *v = NULL;
+      LSM_TRY(take_value(c, "--stride", arg[8] == '=' ? arg + 9 : NULL, &v, err));
+      long n;
+      LSM_TRY(parse_int("--stride", v, 2, 1000000, &n, err));
+      cli->stride = (int)n;
+    } else if (arg[0] == '-') {
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s' (see 'lsmorph help score')", arg);
+    } else if (!cli->truth_dir) {
+      cli->truth_dir = arg;
+    } else if (!cli->result_dir) {
+      cli->result_dir = arg;
+    } else {
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "unexpected argument '%s'", arg);
+    }
+  }
+  if (!cli->truth_dir || !cli->result_dir)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "score: needs TRUTH_DIR and OUT_DIR");
+  if (!cli->stride) return lsm_fail(err, LSM_ERR_USAGE, NULL, "score: needs --stride K");
+  return LSM_OK;
+}
+
+lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
+  cli_defaults(cli);
+  if (argc < 2) return lsm_fail(err, LSM_ERR_USAGE, NULL, "no command (see 'lsmorph --help')");
+  const char *cmd = argv[1];
+  arg_cursor c = {argc, 2, argv};
+  if (strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0) {
+    cli->command = LSM_CMD_HELP;
+    return LSM_OK;
+  }
+  if (strcmp(cmd, "help") == 0) {
+    cli->command = LSM_CMD_HELP;
+    cli->help_topic = argc > 2 ? argv[2] : NULL;
+    return LSM_OK;
+  }
+  if (strcmp(cmd, "-V") == 0 || strcmp(cmd, "--version") == 0) {
+    cli->command = LSM_CMD_VERSION;
+    return LSM_OK;
+  }
+  if (strcmp(cmd, "reconstruct") == 0) {
+    cli->command = LSM_CMD_RECONSTRUCT;
+    return parse_reconstruct(&c, cli, err);
+  }
+  if (strcmp(cmd, "score") == 0) {
+    cli->command = LSM_CMD_SCORE;
+    return parse_score(&c, cli, err);
+  }
+  return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown command '%s' (see 'lsmorph --help')", cmd);
+}

@@ -1,0 +1,50 @@
+/* lsm_cli: the command line of lsmorph, parsed into plain options.
+ * Kept apart from main() so tests and the fuzzer can drive it directly. */
+#ifndef LSM_CLI_H
+#define LSM_CLI_H
+
+#include <stdint.h>
+
+#include "lsm_stack.h"
+#include "lsm_status.h"
+
+#define LSM_VERSION "0.1.0"
+
+typedef enum lsm_command {
+  LSM_CMD_NONE = 0,
+  LSM_CMD_HELP,
+  LSM_CMD_VERSION,
+  LSM_CMD_RECONSTRUCT,
+  LSM_CMD_SCORE
+} lsm_command;
+
+typedef struct lsm_cli {
+  lsm_command command;
+  const char *help_topic;    /* subcommand whose help was asked, or NULL */
+  /* reconstruct */
+  const char *slice_dir;
+  const char *out_dir;
+  const char *heights_file;  /* --heights */
+  double spacing;            /* --spacing (uniform heights) */
+  int invert;
+  int quiet;
+  int threads;               /* 0 = all cores */
+  uint64_t max_pixels;       /* per slice */
+  int write_slices;          /* PNG masks of every output slice */
+  lsm_stack_opts stack;
+  /* score */
+  const char *truth_dir;
+  const char *result_dir;
+  const char *keep;          /* --held-out-of: which truth slices were input */
+  int stride;                /* score: input slices were every stride-th */
+} lsm_cli;
+
+/* Parses argv (argv[0] is the program).  Returns LSM_OK, or LSM_ERR_USAGE
+ * with a message in err. */
+lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err);
+
+/* Prints the help text for a topic (NULL: general) to f. */
+#include <stdio.h>
+void lsm_cli_help(FILE *f, const char *topic);
+
+#endif

@@ -1,0 +1,517 @@
+#include "lsm_stack.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/types.h>
+#include <string.h>
+#include <time.h>
+
+#include "lsm_sdf.h"
+
+/* ---- names ------------------------------------------------------------------------ */
+
+static const char *const method_names[LSM_METHOD_COUNT] = {"ls", "blend"};
+static const char *const input_names[LSM_INPUT_COUNT] = {"mask", "outline"};
+static const char *const align_names[LSM_ALIGN_COUNT] = {"hull", "none"};
+
+static int name_index(const char *const *names, int count, const char *name) {
+  for (int k = 0; k < count; ++k)
+    if (name && strcmp(name, names[k]) == 0) return k;
+  return -1;
+}
+
+const char *lsm_method_name(lsm_method m) {
+  return m > LSM_METHOD_UNKNOWN && m < LSM_METHOD_COUNT ? method_names[m] : "unknown";
+}
+lsm_method lsm_method_from_name(const char *name) {
+  return (lsm_method)name_index(method_names, LSM_METHOD_COUNT, name);
+}
+const char *lsm_input_name(lsm_input_kind k) {
+  return k > LSM_INPUT_UNKNOWN && k < LSM_INPUT_COUNT ? input_names[k] : "unknown";
+}
+lsm_input_kind lsm_input_from_name(const char *name) {
+  return (lsm_input_kind)name_index(input_names, LSM_INPUT_COUNT, name);
+}
+const char *lsm_align_name(lsm_align a) {
+  return a > LSM_ALIGN_UNKNOWN && a < LSM_ALIGN_COUNT ? align_names[a] : "unknown";
+}
+lsm_align lsm_align_from_name(const char *name) {
+  return (lsm_align)name_index(align_names, LSM_ALIGN_COUNT, name);
+}
+
+void lsm_stack_opts_default(lsm_stack_opts *opts) {
+  opts->method = LSM_METHOD_LS;
+  opts->input = LSM_INPUT_MASK;
+  opts->align = LSM_ALIGN_HULL;
+  opts->pixel_size = 1.0;
+  opts->dz = 0.0;
+  opts->per_iteration = 0;
+  opts->tol = 0.25;
+  opts->max_iter = 100000;
+  lsm_morph_opts_default(&opts->morph);
+}
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---- one input slice ----------------------------------------------------------------- */
+
+typedef struct slice {
+  lsm_mask raw;    /* as read: outline or mask */
+  lsm_mask filled; /* the region (== raw for mask input) */
+  int empty;
+  double cx, cy;   /* hull centroid (pixels) */
+  int loaded;
+} slice;
+
+static void slice_free(slice *s) {
+  if (s->filled.pixels != s->raw.pixels) lsm_mask_free(&s->filled);
+  lsm_mask_free(&s->raw);
+  memset(s, 0, sizeof *s);
+}
+
+static lsm_status slice_load(const lsm_slice_source *src, size_t index, int width, int height,
+                             lsm_input_kind input, slice *s, lsm_err *err) {
+  memset(s, 0, sizeof *s);
+  LSM_TRY(src->load(src->ctx, index, &s->raw, err));
+  const char *name = src->name ? src->name(src->ctx, index) : NULL;
+  if (s->raw.width != width || s->raw.height != height) {
+    lsm_status st = lsm_fail(err, LSM_ERR_INPUT, name,
+                             "slice is %dx%d but the first slice is %dx%d", s->raw.width,
+                             s->raw.height, width, height);
+    slice_free(s);
+    return st;
+  }
+  if (input == LSM_INPUT_OUTLINE) {
+    lsm_status st = lsm_outline_fill(&s->raw, &s->filled, err);
+    if (st != LSM_OK) {
+      slice_free(s);
+      return st;
+    }
+  } else {
+    s->filled = s->raw;
+  }
+  s->empty = !lsm_hull_centroid(&s->filled, &s->cx, &s->cy);
+  s->loaded = 1;
+  return LSM_OK;
+}
+
+/* phi of a slice placed on phi's canvas with its pixel (0,0) at cell (ox, oy). */
+static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
+                            lsm_err *err) {
+  lsm_mask canvas;
+  LSM_TRY(lsm_mask_create(phi->nx, phi->ny, &canvas, err));
+  for (int y = 0; y < s->raw.height; ++y) {
+    int cy = y + oy;
+    if (cy < 0 || cy >= canvas.height) continue;
+    for (int x = 0; x < s->raw.width; ++x) {
+      int cx = x + ox;
+      if (cx < 0 || cx >= canvas.width) continue;
+      canvas.pixels[(size_t)cy * canvas.width + cx] = s->raw.pixels[(size_t)y * s->raw.width + x];
+    }
+  }
+  lsm_status st = input == LSM_INPUT_OUTLINE ? lsm_sdf_from_outline(&canvas, phi, err)
+                                             : lsm_sdf_from_mask(&canvas, phi, err);
+  lsm_mask_free(&canvas);
+  return st;
+}
+
+/* ---- the pair's working frame ------------------------------------------------------------- */
+
+typedef struct frame {
+  int width, height;     /* image size */
+  int pad;               /* canvas margin on every side */
+  int dax, day, dbx, dby; /* whole-pixel shifts of A and B (centroid - centre) */
+  float clamp;           /* |phi| written out is at most this */
+} frame;
+
+static void frame_setup(frame *f, const slice *a, const slice *b, lsm_align align, int width,
+                        int height, double pixel) {
+  f->width = width;
+  f->height = height;
+  f->dax = f->day = f->dbx = f->dby = 0;
+  if (align == LSM_ALIGN_HULL && !(a->empty && b->empty)) {
+    const double mx = 0.5 * (width - 1), my = 0.5 * (height - 1);
+    const slice *ra = a->empty ? b : a, *rb = b->empty ? a : b;
+    f->dax = (int)lround(ra->cx - mx);
+    f->day = (int)lround(ra->cy - my);
+    f->dbx = (int)lround(rb->cx - mx);
+    f->dby = (int)lround(rb->cy - my);
+  }
+  int m = abs(f->dax);
+  if (abs(f->day) > m) m = abs(f->day);
+  if (abs(f->dbx) > m) m = abs(f->dbx);
+  if (abs(f->dby) > m) m = abs(f->dby);
+  f->pad = m + 2;
+  f->clamp = (float)(pixel * hypot((double)width, (double)height));
+}
+
+/* Writes the slice at fraction s from the working field into out (width x
+ * height), undoing the alignment shift (1 - s) d_A + s d_B. */
+static void frame_extract(const frame *f, const lsm_grid *work, double s, float *out) {
+  const double shx = (1.0 - s) * f->dax + s * f->dbx, shy = (1.0 - s) * f->day + s * f->dby;
+  const double ox = f->pad - shx, oy = f->pad - shy;
+  const int whole = ox == floor(ox) && oy == floor(oy);
+  for (int y = 0; y < f->height; ++y)
+    for (int x = 0; x < f->width; ++x) {
+      float v = whole ? LSM_AT(work, x + (int)ox, y + (int)oy)
+                      : lsm_grid_sample(work, x + ox, y + oy);
+      if (v > f->clamp) v = f->clamp;
+      if (v < -f->clamp) v = -f->clamp;
+      out[(size_t)y * f->width + x] = v;
+    }
+}
+
+/* ---- the driver ------------------------------------------------------------------------ */
+
+typedef struct stack_run {
+  const lsm_slice_source *src;
+  const lsm_stack_opts *opts;
+  const lsm_slice_sink *sink;
+  const lsm_progress *progress;
+  int width, height;
+  float *out;            /* one output slice */
+  lsm_grid *image_phi;   /* an input slice's phi in the image frame */
+  size_t done, total;
+} stack_run;
+
+static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
+  LSM_TRY(r->sink->emit(r->sink->ctx, r->out, r->width, r->height, z, input_index, err));
+  r->done++;
+  if (r->progress && r->progress->update)
+    r->progress->update(r->progress->ctx, r->done, r->total,
+                        input_index >= 0 ? (size_t)input_index : 0, r->src->count - 1);
+  return LSM_OK;
+}
+
+static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double z, lsm_err *err) {
+  LSM_TRY(slice_phi(s, r->opts->input, 0, 0, r->image_phi, err));
+  frame f;
+  frame_setup(&f, s, s, LSM_ALIGN_NONE, r->width, r->height, r->opts->pixel_size);
+  f.pad = 0;
+  frame_extract(&f, r->image_phi, 0.0, r->out);
+  return emit(r, z, (long)index, err);
+}
+
+/* The working fields of one gap: phi_A and phi_B on the padded canvas, with
+ * empty slices replaced by the constant target described in lsm_stack.h. */
+typedef struct gap {
+  frame f;
+  lsm_grid *phi_a, *phi_b;
+} gap;
+
+static void gap_free(gap *g) {
+  lsm_grid_destroy(&g->phi_a);
+  lsm_grid_destroy(&g->phi_b);
+}
+
+static lsm_status gap_setup(stack_run *r, const slice *a, const slice *b, gap *g, lsm_err *err) {
+  memset(g, 0, sizeof *g);
+  const lsm_stack_opts *o = r->opts;
+  frame_setup(&g->f, a, b, o->align, r->width, r->height, o->pixel_size);
+  const int nx = r->width + 2 * g->f.pad, ny = r->height + 2 * g->f.pad;
+  const float h = (float)o->pixel_size;
+  lsm_status st = lsm_grid_create(nx, ny, h, h, &g->phi_a, err);
+  if (st == LSM_OK) st = lsm_grid_create(nx, ny, h, h, &g->phi_b, err);
+  if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dax, g->f.pad - g->f.day, g->phi_a, err);
+  if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dbx, g->f.pad - g->f.dby, g->phi_b, err);
+  if (st != LSM_OK) {
+    gap_free(g);
+    return st;
+  }
+  if (a->empty != b->empty) {
+    lsm_grid *full = a->empty ? g->phi_b : g->phi_a, *none = a->empty ? g->phi_a : g->phi_b;
+    double depth = -(double)lsm_grid_min(full);
+    if (depth < 0.5 * h) depth = 0.5 * h;
+    double c = o->method == LSM_METHOD_BLEND ? depth : depth / log(2.0);
+    lsm_grid_fill(none, (float)c);
+  }
+  return LSM_OK;
+}
+
+/* Erosion depth of the object at fraction sigma of a gap that runs from a
+ * non-empty slice (sigma = 0, deepest point at depth R) to an empty one.
+ * ls:    a paraboloid cap, radius R sqrt(1 - 2 sigma): cross-sections of a smooth
+ *        closed surface near its tip shrink like this, and the cap closes at
+ *        sigma = 1/2 (the halfway rule).
+ * blend: the zero set of (1 - sigma) phi + sigma R, i.e. depth R sigma / (1 - sigma). */
+static double cap_depth(lsm_method method, double R, double sigma) {
+  if (sigma >= 0.5) return R * (1.0 + 1e-6) + 1e-6;
+  if (method == LSM_METHOD_BLEND) return R * sigma / (1.0 - sigma);
+  return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
+}
+
+/* A gap with exactly one empty side: the non-empty slice's phi raised by the
+ * cap depth.  For a signed distance phi, phi + e is the exact level-set
+ * solution of a uniform inward motion by e (its zero set is the erosion by e). */
+static lsm_status run_gap_cap(stack_run *r, gap *g, int a_empty, const double *zs,
+                              const double *fs, size_t n, lsm_pair_stats *ps, lsm_err *err) {
+  const lsm_grid *full = a_empty ? g->phi_b : g->phi_a;
+  lsm_grid *work = NULL;
+  LSM_TRY(lsm_grid_clone(full, &work, err));
+  const double R = fmax(-(double)lsm_grid_min(full), 0.5 * full->dx);
+  lsm_status st = LSM_OK;
+  for (size_t k = 0; st == LSM_OK && k < n; ++k) {
+    const double sigma = a_empty ? 1.0 - fs[k] : fs[k];
+    const float e = (float)cap_depth(r->opts->method, R, sigma);
+    for (int j = 0; j < work->ny; ++j)
+      for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + e;
+    frame_extract(&g->f, work, fs[k], r->out);
+    st = emit(r, zs[k], -1, err);
+    ps->slices++;
+  }
+  lsm_grid_destroy(&work);
+  return st;
+}
+
+/* Two-sided level-set morph of a gap (both slices non-empty).
+ *
+ * The morph equation moves a front point with normal speed -phi_T: parts of
+ * A outside B retreat toward B at a speed equal to their distance from it,
+ * which is linear in s under t(s) = -ln(1 - s), but parts of B outside A are
+ * reached only as fast as the depth inside B allows, so thin features of the
+ * target (a protrusion of width w and length L needs t ~ L / w) arrive late.
+ * The forward morph A -> B is therefore used only where it retreats (inside
+ * A), and the reverse morph B -> A at 1 - s where B retreats (inside B):
+ *     phi(s) = min( max(phi_AB(s), phi_A), max(phi_BA(1 - s), phi_B) ).
+ * Inside A and B both terms are negative; outside both, both are positive.
+ * The reverse snapshots are needed in the opposite order, so they are parked
+ * in an anonymous temporary file, one working grid each. */
+static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const double *fs,
+                                size_t n, lsm_pair_stats *ps, lsm_err *err) {
+  const lsm_morph_opts *mo = &r->opts->morph;
+  const int max_iter = r->opts->max_iter;
+  const lsm_grid *pa = g->phi_a, *pb = g->phi_b;
+  const size_t cells = (size_t)pa->nx * (size_t)pa->ny;
+  lsm_morph *fwd = NULL, *rev = NULL;
+  lsm_grid *mix = NULL;
+  float *row = NULL;
+  FILE *park = NULL;
+  double t0 = now_seconds(), solver = 0.0;
+  lsm_status st = lsm_morph_create(pb, pa, mo, &rev, err);
+  if (st == LSM_OK) st = lsm_grid_clone(pa, &mix, err);
+  if (st == LSM_OK && !(row = lsm_alloc(cells, sizeof(float), err, "morph snapshot")))
+    st = err ? err->status : LSM_ERR_NOMEM;
+  if (st == LSM_OK && !(park = tmpfile()))
+    st = lsm_fail(err, LSM_ERR_IO, NULL, "cannot create a temporary file: %s", strerror(errno));
+  /* Reverse morph, latest output first; snapshot k goes to slot k. */
+  for (size_t q = n; st == LSM_OK && q-- > 0;) {
+    const double t = lsm_morph_time_of_fraction(1.0 - fs[q]);
+    st = lsm_morph_advance_to(rev, t, max_iter, err);
+    if (st != LSM_OK) break;
+    if (lsm_morph_time(rev) < t * (1.0 - 1e-9)) ps->hit_max_iter = 1;
+    const lsm_grid *p = lsm_morph_phi(rev);
+    for (int j = 0; j < p->ny; ++j) memcpy(row + (size_t)j * p->nx, &LSM_AT(p, 0, j), (size_t)p->nx * sizeof(float));
+    if (fseeko(park, (off_t)(q * cells * sizeof(float)), SEEK_SET) != 0 ||
+        fwrite(row, sizeof(float), cells, park) != cells)
+      st = lsm_fail(err, LSM_ERR_IO, NULL, "cannot write a temporary file: %s", strerror(errno));
+  }
+  if (st == LSM_OK) st = lsm_morph_create(pa, pb, mo, &fwd, err);
+  for (size_t k = 0; st == LSM_OK && k < n; ++k) {
+    const double t = lsm_morph_time_of_fraction(fs[k]);
+    st = lsm_morph_advance_to(fwd, t, max_iter, err);
+    if (st != LSM_OK) break;
+    if (lsm_morph_time(fwd) < t * (1.0 - 1e-9)) ps->hit_max_iter = 1;
+    if (fseeko(park, (off_t)(k * cells * sizeof(float)), SEEK_SET) != 0 ||
+        fread(row, sizeof(float), cells, park) != cells) {
+      st = lsm_fail(err, LSM_ERR_IO, NULL, "cannot read a temporary file");
+      break;
+    }
+    const lsm_grid *pf = lsm_morph_phi(fwd);
+    for (int j = 0; j < mix->ny; ++j) {
+      const float *f = &LSM_AT(pf, 0, j), *a = &LSM_AT(pa, 0, j), *b = &LSM_AT(pb, 0, j);
+      const float *rv = row + (size_t)j * mix->nx;
+      float *o = &LSM_AT(mix, 0, j);
+      for (int i = 0; i < mix->nx; ++i) o[i] = fminf(fmaxf(f[i], a[i]), fmaxf(rv[i], b[i]));
+    }
+    frame_extract(&g->f, mix, fs[k], r->out);
+    solver += now_seconds() - t0;
+    st = emit(r, zs[k], -1, err);
+    t0 = now_seconds();
+    ps->slices++;
+  }
+  if (fwd && rev) {
+    ps->iterations = lsm_morph_iterations(fwd) + lsm_morph_iterations(rev);
+    ps->dt = lsm_morph_dt(fwd);
+    ps->cp = lsm_morph_iterations(fwd) ? lsm_morph_cp(fwd) : 0.0;
+    ps->t_final = lsm_morph_time(fwd);
+  }
+  ps->seconds = solver;
+  if (park) fclose(park);
+  free(row);
+  lsm_grid_destroy(&mix);
+  lsm_morph_destroy(&fwd);
+  lsm_morph_destroy(&rev);
+  return st;
+}
+
+/* Default mode, one gap: the output heights zs (fractions fs) strictly inside it. */
+static lsm_status run_gap_regular(stack_run *r, const slice *a, const slice *b, const double *zs,
+                                  const double *fs, size_t n, lsm_pair_stats *ps, lsm_err *err) {
+  if (n == 0) return LSM_OK;
+  gap g;
+  LSM_TRY(gap_setup(r, a, b, &g, err));
+  lsm_status st = LSM_OK;
+  ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
+  if (a->empty && b->empty) {
+    lsm_grid_fill(g.phi_a, g.f.clamp);
+    for (size_t k = 0; st == LSM_OK && k < n; ++k) {
+      frame_extract(&g.f, g.phi_a, fs[k], r->out);
+      st = emit(r, zs[k], -1, err);
+      ps->slices++;
+    }
+  } else if (a->empty != b->empty) {
+    st = run_gap_cap(r, &g, a->empty, zs, fs, n, ps, err);
+  } else if (r->opts->method == LSM_METHOD_BLEND) {
+    lsm_grid *mix = NULL;
+    st = lsm_grid_clone(g.phi_a, &mix, err);
+    for (size_t k = 0; st == LSM_OK && k < n; ++k) {
+      const float s = (float)fs[k];
+      for (int j = 0; j < mix->ny; ++j)
+        for (int i = 0; i < mix->nx; ++i)
+          LSM_AT(mix, i, j) = (1.0f - s) * LSM_AT(g.phi_a, i, j) + s * LSM_AT(g.phi_b, i, j);
+      frame_extract(&g.f, mix, fs[k], r->out);
+      st = emit(r, zs[k], -1, err);
+      ps->slices++;
+    }
+    lsm_grid_destroy(&mix);
+  } else {
+    st = run_gap_morph(r, &g, zs, fs, n, ps, err);
+  }
+  gap_free(&g);
+  return st;
+}
+
+/* Per-iteration mode, one gap: run to convergence once to count the
+ * iterations k, then again emitting iterate n at height linspace(z_A, z_B, k+2)[n]. */
+static lsm_status run_gap_iterations(stack_run *r, const slice *a, const slice *b, double za,
+                                     double zb, lsm_pair_stats *ps, lsm_err *err) {
+  gap g;
+  LSM_TRY(gap_setup(r, a, b, &g, err));
+  ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
+  lsm_morph *m = NULL;
+  const double t0 = now_seconds();
+  lsm_status st = lsm_morph_create(g.phi_a, g.phi_b, &r->opts->morph, &m, err);
+  int k = 0;
+  while (st == LSM_OK && k < r->opts->max_iter) {
+    st = lsm_morph_step(m, INFINITY, err);
+    ++k;
+    if (st == LSM_OK && lsm_morph_cp(m) <= r->opts->tol) break;
+  }
+  if (st == LSM_OK) {
+    ps->iterations = k;
+    ps->dt = lsm_morph_dt(m);
+    ps->cp = lsm_morph_cp(m);
+    ps->t_final = lsm_morph_time(m);
+    ps->hit_max_iter = k >= r->opts->max_iter && lsm_morph_cp(m) > r->opts->tol;
+  }
+  lsm_morph_destroy(&m);
+  double solver = now_seconds() - t0;
+  if (st == LSM_OK) st = lsm_morph_create(g.phi_a, g.phi_b, &r->opts->morph, &m, err);
+  for (int n = 1; st == LSM_OK && n <= k; ++n) {
+    double t1 = now_seconds();
+    st = lsm_morph_step(m, INFINITY, err);
+    if (st != LSM_OK) break;
+    const double s = (double)n / (double)(k + 1);
+    frame_extract(&g.f, lsm_morph_phi(m), s, r->out);
+    solver += now_seconds() - t1;
+    st = emit(r, za + s * (zb - za), -1, err);
+    ps->slices++;
+  }
+  ps->seconds = solver;
+  lsm_morph_destroy(&m);
+  gap_free(&g);
+  return st;
+}
+
+size_t lsm_stack_output_count(const double *z, size_t count, double dz) {
+  if (count == 0 || !(dz > 0.0)) return 0;
+  double span = z[count - 1] - z[0];
+  return (size_t)floor(span / dz + 1e-6) + 1;
+}
+
+lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
+                         const lsm_stack_opts *opts, const lsm_slice_sink *sink,
+                         lsm_pair_stats *stats, const lsm_progress *progress, lsm_err *err) {
+  if (src->count < 2)
+    return lsm_fail(err, LSM_ERR_INPUT, NULL, "need at least two slices, got %zu", src->count);
+  for (size_t i = 1; i < src->count; ++i)
+    if (!(src->z[i] > src->z[i - 1]))
+      return lsm_fail(err, LSM_ERR_INPUT, NULL, "heights must increase strictly (slice %zu)", i + 1);
+  if (!(opts->pixel_size > 0.0) || !isfinite(opts->pixel_size))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "pixel size must be positive");
+  if (opts->per_iteration && opts->method == LSM_METHOD_BLEND)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a solver method, not blend");
+  const double dz = opts->dz > 0.0 ? opts->dz : opts->pixel_size;
+
+  stack_run r = {src, opts, sink, progress, width, height, NULL, NULL, 0, 0};
+  r.out = lsm_alloc((size_t)width * (size_t)height, sizeof(float), err, "output slice");
+  if (!r.out) return err ? err->status : LSM_ERR_NOMEM;
+  lsm_status st = lsm_grid_create(width, height, (float)opts->pixel_size,
+                                  (float)opts->pixel_size, &r.image_phi, err);
+  r.total = opts->per_iteration ? 0 : lsm_stack_output_count(src->z, src->count, dz);
+
+  slice a = {0}, b = {0};
+  const size_t K = r.total;
+  const double z0 = src->z[0], eps = 1e-6 * dz;
+  double *zs = NULL, *fs = NULL;
+  size_t k = 0; /* next output index (default mode) */
+  if (st == LSM_OK) st = slice_load(src, 0, width, height, opts->input, &a, err);
+  if (st == LSM_OK && opts->per_iteration) st = emit_input(&r, &a, 0, src->z[0], err);
+  for (size_t i = 0; st == LSM_OK && i + 1 < src->count; ++i) {
+    lsm_pair_stats *ps = &stats[i];
+    memset(ps, 0, sizeof *ps);
+    ps->source = i;
+    ps->target = i + 1;
+    st = slice_load(src, i + 1, width, height, opts->input, &b, err);
+    if (st != LSM_OK) break;
+    const double za = src->z[i], zb = src->z[i + 1];
+    if (opts->per_iteration) {
+      st = run_gap_iterations(&r, &a, &b, za, zb, ps, err);
+      if (st == LSM_OK) st = emit_input(&r, &b, i + 1, zb, err);
+    } else {
+      /* Output heights in [za, zb): the one on za (if any) is slice i itself. */
+      size_t first = k, n = 0;
+      while (k < K && z0 + (double)k * dz < zb - eps) ++k;
+      free(zs);
+      free(fs);
+      zs = lsm_alloc(k - first + 1, sizeof *zs, err, "heights");
+      fs = lsm_alloc(k - first + 1, sizeof *fs, err, "fractions");
+      if (!zs || !fs) {
+        st = err ? err->status : LSM_ERR_NOMEM;
+        break;
+      }
+      for (size_t q = first; q < k; ++q) {
+        double z = z0 + (double)q * dz;
+        if (fabs(z - za) <= eps) {
+          st = emit_input(&r, &a, i, z, err);
+          if (st != LSM_OK) break;
+          continue;
+        }
+        zs[n] = z;
+        fs[n] = (z - za) / (zb - za);
+        ++n;
+      }
+      if (st == LSM_OK) st = run_gap_regular(&r, &a, &b, zs, fs, n, ps, err);
+    }
+    slice_free(&a);
+    a = b;
+    memset(&b, 0, sizeof b);
+  }
+  /* The last input slice, if it lies on the output grid. */
+  if (st == LSM_OK && !opts->per_iteration && k < K &&
+      fabs(z0 + (double)k * dz - src->z[src->count - 1]) <= eps)
+    st = emit_input(&r, &a, src->count - 1, z0 + (double)k * dz, err);
+  free(zs);
+  free(fs);
+  slice_free(&a);
+  slice_free(&b);
+  lsm_grid_destroy(&r.image_phi);
+  free(r.out);
+  return st;
+}

@@ -1,0 +1,124 @@
+/* lsm_stack: the stack driver.  Walks the input slices in height order, morphs
+ * (or blends) each consecutive pair, and hands every output slice to a sink,
+ * one at a time: at most the current pair and its working grids are in memory.
+ *
+ * Output heights (default mode): the regular grid z0, z0 + dz, ... up to the
+ * last input height.  An output height on an input height gets that input
+ * slice exactly; a height a fraction s of the way through a gap gets the morph
+ * at time t(s) = -ln(1 - s) (lsm_morph_time_of_fraction), or the blend
+ * (1 - s) phi_A + s phi_B.
+ * Per-iteration mode (the document's, §3.6–3.8): every solver iteration of a
+ * pair is a slice, at heights linspace(z_A, z_B, k + 2).
+ *
+ * Alignment (§3.2, §3.9): each slice of a pair is shifted by whole pixels so
+ * the centroid of the convex hull of its foreground sits at the image centre,
+ * on a canvas padded so nothing is clipped; an intermediate slice at fraction
+ * s is shifted back by (1 - s) d_A + s d_B (bilinear resampling of phi), so
+ * centroids travel on the straight segment between the two slices'.
+ *
+ * Empty slices: the object is absent there.  Next to a non-empty slice A the
+ * object shrinks to nothing at mid-gap: the empty side gets the constant
+ * target phi = c, with c chosen so that the deepest point of A (depth R)
+ * vanishes at s = 1/2 — c = R for the blend (zero set of (1-s) phi_A + s c),
+ * c = R / ln 2 for the morph (the front then erodes at speed c and t(1/2) = ln 2).
+ */
+#ifndef LSM_STACK_H
+#define LSM_STACK_H
+
+#include <stddef.h>
+
+#include "lsm_grid.h"
+#include "lsm_morph.h"
+#include "lsm_status.h"
+
+/* Add new items at the end of each list. */
+typedef enum lsm_method {
+  LSM_METHOD_UNKNOWN = -1,
+  LSM_METHOD_LS,    /* level-set morph */
+  LSM_METHOD_BLEND, /* linear interpolation of the two signed distances */
+  LSM_METHOD_COUNT
+} lsm_method;
+
+typedef enum lsm_input_kind {
+  LSM_INPUT_UNKNOWN = -1,
+  LSM_INPUT_MASK,    /* filled regions */
+  LSM_INPUT_OUTLINE, /* thin closed contours, inside by parity */
+  LSM_INPUT_COUNT
+} lsm_input_kind;
+
+typedef enum lsm_align {
+  LSM_ALIGN_UNKNOWN = -1,
+  LSM_ALIGN_HULL, /* convex-hull centroid to the image centre */
+  LSM_ALIGN_NONE,
+  LSM_ALIGN_COUNT
+} lsm_align;
+
+const char *lsm_method_name(lsm_method m);
+lsm_method lsm_method_from_name(const char *name);
+const char *lsm_input_name(lsm_input_kind k);
+lsm_input_kind lsm_input_from_name(const char *name);
+const char *lsm_align_name(lsm_align a);
+lsm_align lsm_align_from_name(const char *name);
+
+typedef struct lsm_stack_opts {
+  lsm_method method;
+  lsm_input_kind input;
+  lsm_align align;
+  double pixel_size;   /* physical size of a pixel (default 1) */
+  double dz;           /* output slice spacing; <= 0 means pixel_size */
+  int per_iteration;   /* the document's output mode */
+  double tol;          /* CP threshold (per-iteration mode, default 0.25) */
+  int max_iter;        /* most solver steps per pair (default 100000) */
+  lsm_morph_opts morph;
+} lsm_stack_opts;
+
+void lsm_stack_opts_default(lsm_stack_opts *opts);
+
+/* Where input slices come from (the CLI reads PNG files; tests synthesise). */
+typedef struct lsm_slice_source {
+  void *ctx;
+  size_t count;       /* number of slices (>= 2) */
+  const double *z;    /* their heights, strictly increasing */
+  /* Loads slice `index` as read (an outline or a mask, per opts.input). */
+  lsm_status (*load)(void *ctx, size_t index, lsm_mask *out, lsm_err *err);
+  /* A name for messages (a file name); may be NULL. */
+  const char *(*name)(void *ctx, size_t index);
+} lsm_slice_source;
+
+/* Where output slices go.  phi is width*height floats, row-major, physical
+ * units, negative inside; input_index is the input slice it reproduces or -1. */
+typedef struct lsm_slice_sink {
+  void *ctx;
+  lsm_status (*emit)(void *ctx, const float *phi, int width, int height, double z,
+                     long input_index, lsm_err *err);
+} lsm_slice_sink;
+
+/* What happened in one gap; the CLI writes these to run.json. */
+typedef struct lsm_pair_stats {
+  size_t source, target;  /* input indices */
+  int iterations;         /* solver steps taken */
+  double dt;              /* step size (the fixed CFL step) */
+  double cp;              /* CP of the last step (0 if no step) */
+  double t_final;         /* morph time reached */
+  double seconds;         /* solver time for the pair */
+  long long cells;        /* grid cells updated per iteration */
+  size_t slices;          /* intermediate slices emitted */
+  int hit_max_iter;       /* 1 if max_iter stopped the pair early */
+} lsm_pair_stats;
+
+typedef struct lsm_progress {
+  void *ctx;
+  /* Called after each output slice: done of total (total 0 when unknown). */
+  void (*update)(void *ctx, size_t done, size_t total, size_t pair, size_t pairs);
+} lsm_progress;
+
+/* Number of output slices in default mode, and their first height. */
+size_t lsm_stack_output_count(const double *z, size_t count, double dz);
+
+/* Runs the whole stack.  stats has source->count - 1 entries.  progress may
+ * be NULL. */
+lsm_status lsm_stack_run(const lsm_slice_source *source, int width, int height,
+                         const lsm_stack_opts *opts, const lsm_slice_sink *sink,
+                         lsm_pair_stats *stats, const lsm_progress *progress, lsm_err *err);
+
+#endif

@@ -1,0 +1,1095 @@
+/* Tests of the io room: PNG in/out, folder listing, heights, NRRD. */
+#include "lsm_test.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <png.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include "io/lsm_io.h"
+
+/* ---- fixture: a fresh temporary folder per test ------------------------------ */
+
+typedef struct tmp_fixture {
+  char dir[64];
+} tmp_fixture;
+
+static void rm_rf(const char *path) {
+  struct stat sb;
+  if (lstat(path, &sb) != 0) return;
+  if (S_ISDIR(sb.st_mode)) {
+    DIR *d = opendir(path);
+    if (d) {
+      struct dirent *e;
+      while ((e = readdir(d)) != NULL) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        char child[1024];
+        snprintf(child, sizeof child, "%s/%s", path, e->d_name);
+        rm_rf(child);
+      }
+      closedir(d);
+    }
+    rmdir(path);
+  } else {
+    unlink(path);
+  }
+}
+
+static int setup_tmp(void **state) {
+  tmp_fixture *f = malloc(sizeof *f);
+  if (!f) return -1;
+  snprintf(f->dir, sizeof f->dir, "/tmp/lsm_test_io_XXXXXX");
+  if (!mkdtemp(f->dir)) {
+    free(f);
+    return -1;
+  }
+  *state = f;
+  return 0;
+}
+
+static int teardown_tmp(void **state) {
+  tmp_fixture *f = *state;
+  if (f) {
+    rm_rf(f->dir);
+    free(f);
+  }
+  return 0;
+}
+
+static void join(char *out, size_t size, const char *dir, const char *name) {
+  int n = snprintf(out, size, "%s/%s", dir, name);
+  assert_true(n > 0 && (size_t)n < size);
+}
+
+static void write_bytes(const char *path, const void *data, size_t len) {
+  FILE *fp = fopen(path, "wb");
+  assert_non_null(fp);
+  if (len) assert_int_equal(fwrite(data, 1, len, fp), len);
+  assert_int_equal(fclose(fp), 0);
+}
+
+static uint8_t *read_bytes(const char *path, size_t *len) {
+  char *data = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_read_file(path, (size_t)1 << 30, &data, len, &err), LSM_OK);
+  return (uint8_t *)data;
+}
+
+#define assert_msg_contains(err, text)                                                \
+  do {                                                                                \
+    if (!strstr((err).msg, (text)))                                                   \
+      fail_msg("message \"%s\" does not contain \"%s\"", (err).msg, (text));          \
+  } while (0)
+
+/* ---- writing test PNGs with libpng directly --------------------------------- */
+
+typedef struct test_png {
+  int width, height, depth, color_type, interlace;
+  const unsigned *samples; /* width*channels per row, one value per sample */
+  const png_color *palette;
+  int num_palette;
+  const png_byte *trans_alpha; /* palette tRNS */
+  int num_trans;
+  const png_color_16 *trans_color; /* gray / RGB tRNS */
+} test_png;
+
+static int channels_of(int color_type) {
+  switch (color_type) {
+    case PNG_COLOR_TYPE_GRAY: return 1;
+    case PNG_COLOR_TYPE_GRAY_ALPHA: return 2;
+    case PNG_COLOR_TYPE_RGB: return 3;
+    case PNG_COLOR_TYPE_RGB_ALPHA: return 4;
+    default: return 1; /* palette index */
+  }
+}
+
+static void write_test_png(const char *path, const test_png *t) {
+  const int ch = channels_of(t->color_type);
+  const size_t per_row = (size_t)t->width * (size_t)ch;
+  const size_t rowbytes = (per_row * (size_t)t->depth + 7) / 8;
+  uint8_t *buf = calloc(rowbytes * (size_t)t->height, 1);
+  png_bytep *rows = malloc((size_t)t->height * sizeof *rows);
+  assert_non_null(buf);
+  assert_non_null(rows);
+  for (int y = 0; y < t->height; ++y) {
+    uint8_t *row = buf + (size_t)y * rowbytes;
+    rows[y] = row;
+    for (size_t s = 0; s < per_row; ++s) {
+      unsigned v = t->samples[(size_t)y * per_row + s];
+      if (t->depth == 16) {
+        row[2 * s] = (uint8_t)(v >> 8);
+        row[2 * s + 1] = (uint8_t)(v & 255u);
+      } else if (t->depth == 8) {
+        row[s] = (uint8_t)v;
+      } else {
+        size_t bit = s * (size_t)t->depth;
+        row[bit / 8] |= (uint8_t)(v << (8 - t->depth - (int)(bit % 8)));
+      }
+    }
+  }
+  FILE *fp = fopen(path, "wb");
+  assert_non_null(fp);
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+  assert_non_null(png);
+  png_infop info = png_create_info_struct(png);
+  assert_non_null(info);
+  if (setjmp(png_jmpbuf(png))) fail_msg("libpng failed to write the test image %s", path);
+  png_init_io(png, fp);
+  png_set_IHDR(png, info, (png_uint_32)t->width, (png_uint_32)t->height, t->depth,
+               t->color_type, t->interlace ? PNG_INTERLACE_ADAM7 : PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  if (t->palette) png_set_PLTE(png, info, t->palette, t->num_palette);
+  if (t->trans_alpha || t->trans_color)
+    png_set_tRNS(png, info, t->trans_alpha, t->num_trans, t->trans_color);
+  png_write_info(png, info);
+  png_write_image(png, rows);
+  png_write_end(png, info);
+  png_destroy_write_struct(&png, &info);
+  assert_int_equal(fclose(fp), 0);
+  free(rows);
+  free(buf);
+}
+
+/* Writes t, reads it back with the given options and compares to expected. */
+static void check_png(const char *dir, const char *name, const test_png *t, int invert,
+                      const uint8_t *expected) {
+  char path[256];
+  join(path, sizeof path, dir, name);
+  write_test_png(path, t);
+  lsm_png_read_opts opts = {invert, 0};
+  lsm_mask mask;
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_status st = lsm_png_read_mask(path, &opts, &mask, &err);
+  if (st != LSM_OK) fail_msg("%s: %s", name, err.msg);
+  assert_int_equal(mask.width, t->width);
+  assert_int_equal(mask.height, t->height);
+  size_t n = (size_t)t->width * (size_t)t->height;
+  for (size_t k = 0; k < n; ++k)
+    if (mask.pixels[k] != expected[k])
+      fail_msg("%s: pixel %zu (x=%zu y=%zu) is %d, expected %d", name, k, k % (size_t)t->width,
+               k / (size_t)t->width, mask.pixels[k], expected[k]);
+  lsm_mask_free(&mask);
+}
+
+/* ---- natural sort ------------------------------------------------------------- */
+
+static int cmp_natural_qsort(const void *a, const void *b) {
+  return lsm_natural_cmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+static void test_natural_cmp(void **state) {
+  (void)state;
+  assert_true(lsm_natural_cmp("2.png", "10.png") < 0);
+  assert_true(lsm_natural_cmp("10.png", "2.png") > 0);
+  assert_true(lsm_natural_cmp("a2", "a10") < 0);
+  assert_true(lsm_natural_cmp("a10", "b1") < 0);
+  assert_true(lsm_natural_cmp("a2", "b1") < 0);
+  assert_true(lsm_natural_cmp("slice_9.png", "slice_10.png") < 0);
+  assert_true(lsm_natural_cmp("x99999999999999999999999", "x100000000000000000000000") < 0);
+  assert_true(lsm_natural_cmp("abc", "abc") == 0);
+  assert_true(lsm_natural_cmp("", "a") < 0);
+  assert_true(lsm_natural_cmp("a", "a1") < 0);
+  /* equal numbers with leading zeros: not 0, antisymmetric, stable */
+  int c1 = lsm_natural_cmp("01.png", "1.png"), c2 = lsm_natural_cmp("1.png", "01.png");
+  assert_true(c1 != 0);
+  assert_true((c1 < 0) == (c2 > 0));
+  assert_int_equal(c1, lsm_natural_cmp("01.png", "1.png"));
+  assert_true(lsm_natural_cmp("001", "01") != 0);
+  assert_true(lsm_natural_cmp("01.png", "2.png") < 0); /* value first */
+  assert_true(lsm_natural_cmp("img007b", "img7a") > 0); /* 'b' > 'a' after equal 7 */
+
+  const char *names[] = {"10.png", "2.png", "b1", "a10", "1.png", "a2", "01.png", "001.png", "0.png"};
+  const char *want[] = {"0.png", "001.png", "01.png", "1.png", "2.png", "10.png", "a2", "a10", "b1"};
+  size_t n = sizeof names / sizeof names[0];
+  const char *sorted[sizeof names / sizeof names[0]];
+  memcpy(sorted, names, sizeof names);
+  qsort(sorted, n, sizeof sorted[0], cmp_natural_qsort);
+  for (size_t i = 0; i < n; ++i) assert_string_equal(sorted[i], want[i]);
+}
+
+/* ---- heights ----------------------------------------------------------------------- */
+
+static void test_heights_good(void **state) {
+  (void)state;
+  const char *text =
+      "# slice heights in mm\n"
+      "\n"
+      "  -3.5\n"
+      "-1e-1\r\n"
+      "\t0\n"
+      "# comment in the middle\n"
+      "   \n"
+      "2.5E+1  \n"
+      "+26\n"
+      "1.25e2"; /* no final newline */
+  double *z = NULL;
+  size_t n = 0;
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_status st = lsm_heights_parse(text, strlen(text), "heights.txt", &z, &n, &err);
+  if (st != LSM_OK) fail_msg("%s", err.msg);
+  const double want[] = {-3.5, -0.1, 0.0, 25.0, 26.0, 125.0};
+  assert_int_equal(n, sizeof want / sizeof want[0]);
+  for (size_t i = 0; i < n; ++i) assert_true(z[i] == want[i]);
+  free(z);
+}
+
+static void test_heights_bad(void **state) {
+  (void)state;
+  static const struct {
+    const char *text;
+    const char *needle;
+  } cases[] = {
+      {"1\nnan\n", "line 2: \"nan\" is not a number"},
+      {"1\n2\ninf\n", "line 3: \"inf\" is not a number"},
+      {"-infinity\n", "line 1:"},
+      {"1\n2\nabc\n", "line 3: \"abc\" is not a number"},
+      {"1\n2 x\n", "line 2: \"2 x\" is not a number"},
+      {"1\n2.5mm\n", "line 2:"},
+      {"0x10\n", "line 1:"},
+      {"1\n1e999\n", "line 2:"},
+      {"1\n3\n\n2\n", "line 4: 2 is not greater than the previous height 3"},
+      {"# c\n0.5\n0.5\n", "line 3: 0.5 is not greater than the previous height 0.5"},
+      {"", "no heights"},
+      {"# only a comment\n\n   \n", "no heights"},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+    double *z = (double *)&z; /* must be reset to NULL */
+    size_t n = 99;
+    lsm_err err;
+    lsm_err_clear(&err);
+    lsm_status st = lsm_heights_parse(cases[i].text, strlen(cases[i].text), "heights.txt", &z, &n, &err);
+    if (st != LSM_ERR_INPUT) fail_msg("case %zu: status %d (%s)", i, (int)st, err.msg);
+    assert_null(z);
+    assert_int_equal(n, 0);
+    assert_true(strncmp(err.msg, "heights.txt: ", 13) == 0);
+    assert_msg_contains(err, cases[i].needle);
+  }
+  /* a NUL byte inside the text is refused, not silently cut */
+  const char nul_text[] = {'1', '\n', '2', '\0', '5', '\n'};
+  double *z = NULL;
+  size_t n = 0;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_heights_parse(nul_text, sizeof nul_text, "h", &z, &n, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, "line 2");
+}
+
+static void test_heights_read(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "heights.txt");
+  const char *text = "0\n1.5\n3\n";
+  write_bytes(path, text, strlen(text));
+  double *z = NULL;
+  size_t n = 0;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_heights_read(path, &z, &n, &err), LSM_OK);
+  assert_int_equal(n, 3);
+  assert_true(z[0] == 0.0 && z[1] == 1.5 && z[2] == 3.0);
+  free(z);
+
+  write_bytes(path, "1\n0\n", 4);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_heights_read(path, &z, &n, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+  assert_msg_contains(err, "line 2");
+
+  join(path, sizeof path, f->dir, "missing.txt");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_heights_read(path, &z, &n, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+}
+
+/* ---- PNG: round trips through our writers ---------------------------------------- */
+
+static void test_png_roundtrip_mask(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "mask.png");
+  lsm_mask m;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_mask_create(37, 23, &m, &err), LSM_OK);
+  uint64_t seed = 12345;
+  for (size_t k = 0; k < 37u * 23u; ++k) m.pixels[k] = (uint8_t)(lsm_test_rand(&seed) & 1u);
+  assert_int_equal(lsm_png_write_mask(path, &m, &err), LSM_OK);
+
+  int w = 0, h = 0;
+  assert_int_equal(lsm_png_read_size(path, &w, &h, &err), LSM_OK);
+  assert_int_equal(w, 37);
+  assert_int_equal(h, 23);
+
+  lsm_mask back;
+  lsm_png_read_opts opts = {0, 0};
+  assert_int_equal(lsm_png_read_mask(path, &opts, &back, &err), LSM_OK);
+  assert_int_equal(back.width, 37);
+  assert_int_equal(back.height, 23);
+  assert_memory_equal(back.pixels, m.pixels, 37u * 23u);
+  lsm_mask_free(&back);
+
+  /* NULL options mean defaults */
+  assert_int_equal(lsm_png_read_mask(path, NULL, &back, &err), LSM_OK);
+  assert_memory_equal(back.pixels, m.pixels, 37u * 23u);
+  lsm_mask_free(&back);
+  lsm_mask_free(&m);
+}
+
+static void test_png_roundtrip_gray_rgb(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  lsm_err err;
+  lsm_err_clear(&err);
+  const uint8_t gray[] = {0, 127, 128, 255, 200, 3};
+  join(path, sizeof path, f->dir, "gray.png");
+  assert_int_equal(lsm_png_write_gray8(path, gray, 3, 2, &err), LSM_OK);
+  lsm_mask m;
+  assert_int_equal(lsm_png_read_mask(path, NULL, &m, &err), LSM_OK);
+  const uint8_t want_gray[] = {0, 0, 1, 1, 1, 0};
+  assert_int_equal(m.width, 3);
+  assert_int_equal(m.height, 2);
+  assert_memory_equal(m.pixels, want_gray, sizeof want_gray);
+  lsm_mask_free(&m);
+
+  const uint8_t rgb[] = {255, 255, 255, 0, 255, 0, 255, 0, 0, 128, 128, 128};
+  join(path, sizeof path, f->dir, "rgb.png");
+  assert_int_equal(lsm_png_write_rgb8(path, rgb, 2, 2, &err), LSM_OK);
+  assert_int_equal(lsm_png_read_mask(path, NULL, &m, &err), LSM_OK);
+  const uint8_t want_rgb[] = {1, 1, 0, 1};
+  assert_memory_equal(m.pixels, want_rgb, sizeof want_rgb);
+  lsm_mask_free(&m);
+
+  /* bad arguments are refused with a message, nothing is left behind */
+  join(path, sizeof path, f->dir, "bad.png");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_write_gray8(path, gray, 0, 2, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+  assert_int_equal(access(path, F_OK), -1);
+}
+
+/* ---- PNG: every colour type and bit depth ------------------------------------------- */
+
+static void test_png_gray1(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {1, 0, 1, 1, 0, 0, 1, 0, 1, 1, /* row 2 */ 0, 0, 0, 1, 1, 1, 1, 0, 0, 1};
+  test_png t = {.width = 10, .height = 2, .depth = 1, .color_type = PNG_COLOR_TYPE_GRAY, .samples = s};
+  uint8_t want[20];
+  for (int k = 0; k < 20; ++k) want[k] = (uint8_t)s[k];
+  check_png(f->dir, "g1.png", &t, 0, want);
+  uint8_t inv[20];
+  for (int k = 0; k < 20; ++k) inv[k] = (uint8_t)!s[k];
+  check_png(f->dir, "g1i.png", &t, 1, inv);
+}
+
+static void test_png_gray2_4(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s2[] = {0, 1, 2, 3};
+  const uint8_t w2[] = {0, 0, 1, 1}; /* 2v >= 4 */
+  test_png t2 = {.width = 4, .height = 1, .depth = 2, .color_type = PNG_COLOR_TYPE_GRAY, .samples = s2};
+  check_png(f->dir, "g2.png", &t2, 0, w2);
+  unsigned s4[16];
+  uint8_t w4[16];
+  for (unsigned v = 0; v < 16; ++v) {
+    s4[v] = v;
+    w4[v] = v >= 8;
+  }
+  test_png t4 = {.width = 16, .height = 1, .depth = 4, .color_type = PNG_COLOR_TYPE_GRAY, .samples = s4};
+  check_png(f->dir, "g4.png", &t4, 0, w4);
+}
+
+static void test_png_gray8(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {0, 127, 128, 255, 1, 254};
+  const uint8_t want[] = {0, 0, 1, 1, 0, 1};
+  test_png t = {.width = 3, .height = 2, .depth = 8, .color_type = PNG_COLOR_TYPE_GRAY, .samples = s};
+  check_png(f->dir, "g8.png", &t, 0, want);
+}
+
+static void test_png_gray16(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {32767, 32768, 0, 65535, 32767 + 128, 32512};
+  /* 32895 is >= 50 % and 32512 (= 127*256) is not: only the 16-bit values decide */
+  const uint8_t want[] = {0, 1, 0, 1, 1, 0};
+  test_png t = {.width = 6, .height = 1, .depth = 16, .color_type = PNG_COLOR_TYPE_GRAY, .samples = s};
+  check_png(f->dir, "g16.png", &t, 0, want);
+  const uint8_t inv[] = {1, 0, 1, 0, 0, 1};
+  check_png(f->dir, "g16i.png", &t, 1, inv);
+}
+
+static void test_png_gray_trns(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {255, 200, 0, 200};
+  png_color_16 key = {0};
+  key.gray = 200; /* gray 200 is fully transparent: composited over black */
+  const uint8_t want[] = {1, 0, 0, 0};
+  test_png t = {.width = 4, .height = 1, .depth = 8, .color_type = PNG_COLOR_TYPE_GRAY,
+                .samples = s, .trans_color = &key};
+  check_png(f->dir, "gtrns.png", &t, 0, want);
+}
+
+static void test_png_gray_alpha(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {255, 255, 255, 127, 255, 128, 0, 255, 200, 0};
+  const uint8_t want[] = {1, 0, 1, 0, 0};
+  test_png t = {.width = 5, .height = 1, .depth = 8, .color_type = PNG_COLOR_TYPE_GRAY_ALPHA, .samples = s};
+  check_png(f->dir, "ga8.png", &t, 0, want);
+
+  const unsigned s16[] = {65535, 32768, 65535, 32767, 32768, 65535, 65535, 0};
+  const uint8_t want16[] = {1, 0, 1, 0};
+  test_png t16 = {.width = 4, .height = 1, .depth = 16, .color_type = PNG_COLOR_TYPE_GRAY_ALPHA, .samples = s16};
+  check_png(f->dir, "ga16.png", &t16, 0, want16);
+}
+
+static void test_png_rgb(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {
+      255, 255, 255, /* white: 1 */
+      0,   0,   0,   /* black: 0 */
+      0,   255, 0,   /* green 0.7152: 1 */
+      255, 0,   0,   /* red 0.2126: 0 */
+      0,   0,   255, /* blue 0.0722: 0 */
+      128, 128, 128, /* exactly the threshold: 1 */
+      127, 127, 127, /* just below: 0 */
+      255, 255, 0,   /* yellow 0.9278: 1 */
+      255, 0,   255, /* magenta 0.2848: 0 */
+      0,   180, 0,   /* 0.7152*180 = 128.7: 1 */
+      0,   178, 0,   /* 0.7152*178 = 127.3: 0 */
+      0,   255, 255, /* cyan 0.7874: 1 */
+  };
+  const uint8_t want[] = {1, 0, 1, 0, 0, 1, 0, 1, 0, 1, 0, 1};
+  test_png t = {.width = 4, .height = 3, .depth = 8, .color_type = PNG_COLOR_TYPE_RGB, .samples = s};
+  check_png(f->dir, "rgb8.png", &t, 0, want);
+
+  const unsigned s16[] = {32768, 32768, 32768, 32767, 32767, 32767, 0, 65535, 0, 65535, 0, 0};
+  const uint8_t want16[] = {1, 0, 1, 0};
+  test_png t16 = {.width = 2, .height = 2, .depth = 16, .color_type = PNG_COLOR_TYPE_RGB, .samples = s16};
+  check_png(f->dir, "rgb16.png", &t16, 0, want16);
+}
+
+static void test_png_rgba(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {
+      255, 255, 255, 0,   /* transparent white: background */
+      255, 255, 255, 255, /* opaque white */
+      255, 255, 255, 128, /* half: 128 -> foreground */
+      255, 255, 255, 127, /* 127 -> background */
+      0,   0,   0,   255, /* opaque black */
+      0,   0,   0,   0,   /* transparent black */
+  };
+  const uint8_t want[] = {0, 1, 1, 0, 0, 0};
+  test_png t = {.width = 3, .height = 2, .depth = 8, .color_type = PNG_COLOR_TYPE_RGB_ALPHA, .samples = s};
+  check_png(f->dir, "rgba8.png", &t, 0, want);
+  const uint8_t inv[] = {1, 0, 0, 1, 1, 1};
+  check_png(f->dir, "rgba8i.png", &t, 1, inv);
+
+  const unsigned s16[] = {65535, 65535, 65535, 0, 65535, 65535, 65535, 32768,
+                          65535, 65535, 65535, 32767, 65535, 65535, 65535, 65535};
+  const uint8_t want16[] = {0, 1, 0, 1};
+  test_png t16 = {.width = 4, .height = 1, .depth = 16, .color_type = PNG_COLOR_TYPE_RGB_ALPHA, .samples = s16};
+  check_png(f->dir, "rgba16.png", &t16, 0, want16);
+}
+
+static void test_png_palette(void **state) {
+  tmp_fixture *f = *state;
+  const png_color pal[] = {{0, 0, 0}, {255, 255, 255}, {255, 255, 255}, {0, 255, 0}};
+  const png_byte trans[] = {255, 255, 0}; /* entry 2 transparent, entry 3 opaque (implicit) */
+  const unsigned s[] = {0, 1, 2, 3, 3, 2, 1, 0};
+  const uint8_t want[] = {0, 1, 0, 1, 1, 0, 1, 0};
+  test_png t = {.width = 4, .height = 2, .depth = 2, .color_type = PNG_COLOR_TYPE_PALETTE, .samples = s,
+                .palette = pal, .num_palette = 4, .trans_alpha = trans, .num_trans = 3};
+  check_png(f->dir, "pal2trns.png", &t, 0, want);
+  const uint8_t inv[] = {1, 0, 1, 0, 0, 1, 0, 1};
+  check_png(f->dir, "pal2trnsi.png", &t, 1, inv);
+
+  /* 8-bit palette, no tRNS: entry 2 is plain white */
+  const uint8_t want8[] = {0, 1, 1, 1, 1, 1, 1, 0};
+  test_png t8 = {.width = 4, .height = 2, .depth = 8, .color_type = PNG_COLOR_TYPE_PALETTE, .samples = s,
+                 .palette = pal, .num_palette = 4};
+  check_png(f->dir, "pal8.png", &t8, 0, want8);
+
+  /* 1-bit palette with half-transparent white */
+  const png_color pal1[] = {{255, 255, 255}, {255, 255, 255}};
+  const png_byte trans1[] = {127, 128};
+  const unsigned s1[] = {0, 1, 1, 0};
+  const uint8_t want1[] = {0, 1, 1, 0};
+  test_png t1 = {.width = 4, .height = 1, .depth = 1, .color_type = PNG_COLOR_TYPE_PALETTE, .samples = s1,
+                 .palette = pal1, .num_palette = 2, .trans_alpha = trans1, .num_trans = 2};
+  check_png(f->dir, "pal1.png", &t1, 0, want1);
+}
+
+static void test_png_interlaced(void **state) {
+  tmp_fixture *f = *state;
+  enum { W = 13, H = 11 };
+  unsigned s[W * H];
+  uint8_t want[W * H];
+  uint64_t seed = 777;
+  for (int k = 0; k < W * H; ++k) {
+    s[k] = (unsigned)(lsm_test_rand(&seed) % 256u);
+    want[k] = s[k] >= 128;
+  }
+  test_png t = {.width = W, .height = H, .depth = 8, .color_type = PNG_COLOR_TYPE_GRAY,
+                .interlace = 1, .samples = s};
+  check_png(f->dir, "inter8.png", &t, 0, want);
+
+  unsigned rgba[W * H * 4];
+  for (int k = 0; k < W * H; ++k) {
+    unsigned v = (unsigned)(lsm_test_rand(&seed) % 256u), a = (k % 3) ? 255u : 0u;
+    rgba[4 * k] = rgba[4 * k + 1] = rgba[4 * k + 2] = v;
+    rgba[4 * k + 3] = a;
+    want[k] = a && v >= 128;
+  }
+  test_png t4 = {.width = W, .height = H, .depth = 8, .color_type = PNG_COLOR_TYPE_RGB_ALPHA,
+                 .interlace = 1, .samples = rgba};
+  check_png(f->dir, "inter_rgba.png", &t4, 0, want);
+
+  unsigned bits[W * H];
+  for (int k = 0; k < W * H; ++k) {
+    bits[k] = (unsigned)(lsm_test_rand(&seed) & 1u);
+    want[k] = (uint8_t)bits[k];
+  }
+  test_png t1 = {.width = W, .height = H, .depth = 1, .color_type = PNG_COLOR_TYPE_GRAY,
+                 .interlace = 1, .samples = bits};
+  check_png(f->dir, "inter1.png", &t1, 0, want);
+}
+
+static void test_png_invert(void **state) {
+  tmp_fixture *f = *state;
+  const unsigned s[] = {0, 127, 128, 255};
+  const uint8_t want[] = {1, 1, 0, 0};
+  test_png t = {.width = 4, .height = 1, .depth = 8, .color_type = PNG_COLOR_TYPE_GRAY, .samples = s};
+  check_png(f->dir, "inv.png", &t, 1, want);
+}
+
+/* ---- PNG: limits and broken files ---------------------------------------------------- */
+
+static void test_png_max_pixels(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "big.png");
+  uint8_t *px = calloc(100 * 100, 1);
+  assert_non_null(px);
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_write_gray8(path, px, 100, 100, &err), LSM_OK);
+  free(px);
+
+  lsm_png_read_opts opts = {0, 5000};
+  lsm_mask m = {7, 7, (uint8_t *)&m};
+  assert_int_equal(lsm_png_read_mask(path, &opts, &m, &err), LSM_ERR_LIMIT);
+  assert_null(m.pixels);
+  assert_int_equal(m.width, 0);
+  assert_msg_contains(err, path);
+  assert_msg_contains(err, "10000");
+
+  opts.max_pixels = 10000;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(path, &opts, &m, &err), LSM_OK);
+  assert_int_equal(lsm_mask_count(&m), 0);
+  lsm_mask_free(&m);
+}
+
+static void test_png_not_png(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  lsm_err err;
+  lsm_mask m;
+  join(path, sizeof path, f->dir, "text.png");
+  write_bytes(path, "hello, this is not an image\n", 28);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(path, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+  assert_msg_contains(err, "not a PNG file");
+  int w, h;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_size(path, &w, &h, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, "not a PNG file");
+
+  join(path, sizeof path, f->dir, "empty.png");
+  write_bytes(path, "", 0);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(path, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, "not a PNG file");
+
+  /* a PNG signature and nothing else */
+  const uint8_t sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
+  join(path, sizeof path, f->dir, "sigonly.png");
+  write_bytes(path, sig, sizeof sig);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(path, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+
+  join(path, sizeof path, f->dir, "missing.png");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(path, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+
+  /* a folder is not a PNG either */
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(f->dir, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, f->dir);
+  assert_msg_contains(err, "folder");
+}
+
+/* A 64x64 noise image (incompressible, several KB) written by our writer. */
+static uint8_t *noise_png(const char *path, size_t *len) {
+  enum { N = 64 };
+  uint8_t px[N * N];
+  uint64_t seed = 99;
+  for (int k = 0; k < N * N; ++k) px[k] = (uint8_t)lsm_test_rand(&seed);
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_write_gray8(path, px, N, N, &err), LSM_OK);
+  return read_bytes(path, len);
+}
+
+static void test_png_truncated(void **state) {
+  tmp_fixture *f = *state;
+  char path[256], cut[256];
+  join(path, sizeof path, f->dir, "noise.png");
+  join(cut, sizeof cut, f->dir, "cut.png");
+  size_t len = 0;
+  uint8_t *data = noise_png(path, &len);
+  assert_true(len > 1000);
+
+  write_bytes(cut, data, len / 2);
+  lsm_mask m;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(cut, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_null(m.pixels);
+  assert_msg_contains(err, cut);
+  assert_msg_contains(err, "truncated");
+
+  /* every shorter length fails cleanly (IEND included: nothing may be missing) */
+  for (size_t n = 0; n < len; n += (n < 64 || n + 64 > len) ? 1 : 37) {
+    write_bytes(cut, data, n);
+    lsm_err_clear(&err);
+    lsm_status st = lsm_png_read_mask(cut, NULL, &m, &err);
+    if (st != LSM_ERR_INPUT) fail_msg("cut at %zu of %zu: status %d (%s)", n, len, (int)st, err.msg);
+    assert_true(err.msg[0] != '\0');
+  }
+  free(data);
+}
+
+/* Offset of the first chunk of the given type (its length field), or 0. */
+static size_t find_chunk(const uint8_t *data, size_t len, const char *type) {
+  size_t pos = 8;
+  while (pos + 12 <= len) {
+    size_t clen = ((size_t)data[pos] << 24) | ((size_t)data[pos + 1] << 16) |
+                  ((size_t)data[pos + 2] << 8) | data[pos + 3];
+    if (memcmp(data + pos + 4, type, 4) == 0) return pos;
+    pos += 12 + clen;
+  }
+  return 0;
+}
+
+static void test_png_corrupt(void **state) {
+  tmp_fixture *f = *state;
+  char path[256], bad[256];
+  join(path, sizeof path, f->dir, "noise.png");
+  join(bad, sizeof bad, f->dir, "bad.png");
+  size_t len = 0;
+  uint8_t *data = noise_png(path, &len);
+  size_t idat = find_chunk(data, len, "IDAT");
+  assert_true(idat > 0);
+  size_t idat_len = ((size_t)data[idat] << 24) | ((size_t)data[idat + 1] << 16) |
+                    ((size_t)data[idat + 2] << 8) | data[idat + 3];
+  assert_true(idat_len > 100);
+  lsm_mask m;
+  lsm_err err;
+
+  /* a byte inside the IDAT data */
+  data[idat + 8 + idat_len / 2] ^= 0x5a;
+  write_bytes(bad, data, len);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(bad, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_null(m.pixels);
+  assert_msg_contains(err, bad);
+  assert_msg_contains(err, "corrupt PNG");
+  data[idat + 8 + idat_len / 2] ^= 0x5a;
+
+  /* the IDAT CRC itself: libpng reports a CRC error */
+  data[idat + 8 + idat_len] ^= 0x01;
+  write_bytes(bad, data, len);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(bad, NULL, &m, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, "CRC");
+  data[idat + 8 + idat_len] ^= 0x01;
+
+  /* IHDR CRC: even the size query fails */
+  data[8 + 8 + 13] ^= 0x80;
+  write_bytes(bad, data, len);
+  int w, h;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_size(bad, &w, &h, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, "CRC");
+  data[8 + 8 + 13] ^= 0x80;
+
+  /* sanity: the repaired bytes read fine again */
+  write_bytes(bad, data, len);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_read_mask(bad, NULL, &m, &err), LSM_OK);
+  lsm_mask_free(&m);
+
+  /* flipping any single byte never crashes; it is either rejected as bad input
+   * or still decodes */
+  size_t rejected = 0, tried = 0;
+  for (size_t k = 0; k < len; k += (k < 80 ? 1 : 53)) {
+    data[k] ^= 0xff;
+    write_bytes(bad, data, len);
+    lsm_err_clear(&err);
+    lsm_status st = lsm_png_read_mask(bad, NULL, &m, &err);
+    if (st == LSM_OK) {
+      lsm_mask_free(&m);
+    } else {
+      if (st != LSM_ERR_INPUT && st != LSM_ERR_LIMIT)
+        fail_msg("flip at %zu: status %d (%s)", k, (int)st, err.msg);
+      assert_msg_contains(err, bad);
+      ++rejected;
+    }
+    ++tried;
+    data[k] ^= 0xff;
+  }
+  assert_true(rejected * 10 >= tried * 9); /* CRCs catch essentially all of them */
+  free(data);
+}
+
+static void test_png_write_errors(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "no/such/folder/x.png");
+  const uint8_t px[4] = {0, 255, 255, 0};
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_png_write_gray8(path, px, 2, 2, &err), LSM_ERR_IO);
+  assert_msg_contains(err, path);
+
+  struct stat sb;
+  if (stat("/dev/full", &sb) == 0 && S_ISCHR(sb.st_mode)) {
+    /* every write fails with ENOSPC: the error must surface (and the device
+     * must of course not be removed) */
+    lsm_err_clear(&err);
+    assert_int_equal(lsm_png_write_gray8("/dev/full", px, 2, 2, &err), LSM_ERR_IO);
+    assert_msg_contains(err, "/dev/full");
+    assert_int_equal(stat("/dev/full", &sb), 0);
+    assert_true(S_ISCHR(sb.st_mode));
+  }
+}
+
+/* ---- folders --------------------------------------------------------------------------- */
+
+static void test_dir_list(void **state) {
+  tmp_fixture *f = *state;
+  const char *files[] = {"10.png", "2.png", "1.PNG", "notes.txt", ".hidden.png", "png", "x.png.txt"};
+  char path[256];
+  for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+    join(path, sizeof path, f->dir, files[i]);
+    write_bytes(path, "x", 1);
+  }
+  join(path, sizeof path, f->dir, "subdir.png");
+  assert_int_equal(mkdir(path, 0755), 0);
+
+  char **list = NULL;
+  size_t n = 0;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_dir_list_png(f->dir, &list, &n, &err), LSM_OK);
+  assert_int_equal(n, 3);
+  const char *want[] = {"1.PNG", "2.png", "10.png"};
+  for (size_t i = 0; i < 3; ++i) {
+    join(path, sizeof path, f->dir, want[i]);
+    assert_string_equal(list[i], path);
+  }
+  lsm_path_list_free(list, n);
+
+  /* a trailing slash does not double up */
+  char slashed[256];
+  snprintf(slashed, sizeof slashed, "%s/", f->dir);
+  assert_int_equal(lsm_dir_list_png(slashed, &list, &n, &err), LSM_OK);
+  assert_int_equal(n, 3);
+  join(path, sizeof path, f->dir, "1.PNG");
+  assert_string_equal(list[0], path);
+  lsm_path_list_free(list, n);
+
+  /* an empty folder lists nothing */
+  join(path, sizeof path, f->dir, "empty");
+  assert_int_equal(mkdir(path, 0755), 0);
+  assert_int_equal(lsm_dir_list_png(path, &list, &n, &err), LSM_OK);
+  assert_int_equal(n, 0);
+  lsm_path_list_free(list, n);
+}
+
+static void test_dir_errors(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  char **list = (char **)&list;
+  size_t n = 5;
+  lsm_err err;
+  join(path, sizeof path, f->dir, "nope");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_dir_list_png(path, &list, &n, &err), LSM_ERR_INPUT);
+  assert_null(list);
+  assert_int_equal(n, 0);
+  assert_msg_contains(err, path);
+  assert_msg_contains(err, "no such folder");
+
+  join(path, sizeof path, f->dir, "file.png");
+  write_bytes(path, "x", 1);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_dir_list_png(path, &list, &n, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, "not a folder");
+}
+
+static void test_make_dir(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  lsm_err err;
+  lsm_err_clear(&err);
+  join(path, sizeof path, f->dir, "out");
+  assert_int_equal(lsm_make_dir(path, &err), LSM_OK);
+  struct stat sb;
+  assert_int_equal(stat(path, &sb), 0);
+  assert_true(S_ISDIR(sb.st_mode));
+  assert_int_equal(lsm_make_dir(path, &err), LSM_OK); /* exists: fine */
+
+  join(path, sizeof path, f->dir, "plain");
+  write_bytes(path, "x", 1);
+  assert_int_equal(lsm_make_dir(path, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+
+  join(path, sizeof path, f->dir, "a/b/c");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_make_dir(path, &err), LSM_ERR_IO); /* one level only */
+  assert_msg_contains(err, path);
+}
+
+static void test_read_file(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "data.bin");
+  uint8_t bytes[10000];
+  uint64_t seed = 5;
+  for (size_t k = 0; k < sizeof bytes; ++k) bytes[k] = (uint8_t)lsm_test_rand(&seed);
+  write_bytes(path, bytes, sizeof bytes);
+
+  char *data = NULL;
+  size_t len = 0;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_read_file(path, sizeof bytes, &data, &len, &err), LSM_OK);
+  assert_int_equal(len, sizeof bytes);
+  assert_memory_equal(data, bytes, sizeof bytes);
+  assert_int_equal(data[len], '\0');
+  free(data);
+
+  assert_int_equal(lsm_read_file(path, sizeof bytes - 1, &data, &len, &err), LSM_ERR_LIMIT);
+  assert_null(data);
+  assert_msg_contains(err, path);
+
+  join(path, sizeof path, f->dir, "empty.txt");
+  write_bytes(path, "", 0);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_read_file(path, 0, &data, &len, &err), LSM_OK);
+  assert_int_equal(len, 0);
+  assert_int_equal(data[0], '\0');
+  free(data);
+
+  join(path, sizeof path, f->dir, "missing.txt");
+  assert_int_equal(lsm_read_file(path, 100, &data, &len, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, path);
+
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_read_file(f->dir, 100, &data, &len, &err), LSM_ERR_INPUT);
+  assert_msg_contains(err, "folder");
+}
+
+/* ---- NRRD ------------------------------------------------------------------------------- */
+
+static uint32_t le32(const uint8_t *p) {
+  return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+
+static int has_line(const char *header, const char *line) {
+  size_t n = strlen(line);
+  for (const char *p = header; (p = strstr(p, line)) != NULL; ++p)
+    if ((p == header || p[-1] == '\n') && p[n] == '\n') return 1;
+  return 0;
+}
+
+static void test_nrrd_roundtrip(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "vol.nrrd");
+  enum { NX = 4, NY = 3, NZ = 3 };
+  float vals[NZ][NX * NY];
+  for (int z = 0; z < NZ; ++z)
+    for (int k = 0; k < NX * NY; ++k) vals[z][k] = (float)(z * 100 + k) * 0.25f - 7.0f;
+  vals[1][5] = 1e-30f;
+  vals[2][0] = -0.0f;
+  vals[2][11] = 3.4e38f;
+
+  lsm_nrrd_writer *w = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_nrrd_open(path, NX, NY, 0.5, 0.25, 1.0, -1.5, 0.0, 3.25, &w, &err), LSM_OK);
+  assert_non_null(w);
+  for (int z = 0; z < NZ; ++z) {
+    assert_int_equal(lsm_nrrd_slices(w), (size_t)z);
+    assert_int_equal(lsm_nrrd_write_slice(w, vals[z], &err), LSM_OK);
+  }
+  assert_int_equal(lsm_nrrd_slices(w), NZ);
+  assert_int_equal(lsm_nrrd_finish(&w, 2.5, &err), LSM_OK);
+  assert_null(w);
+
+  size_t len = 0;
+  uint8_t *data = read_bytes(path, &len);
+  size_t header_len = 0;
+  for (size_t k = 0; k + 1 < len && header_len == 0; ++k)
+    if (data[k] == '\n' && data[k + 1] == '\n') header_len = k + 2;
+  assert_true(header_len > 0);
+  assert_int_equal(len, header_len + (size_t)NX * NY * NZ * 4);
+
+  char *header = malloc(header_len + 1);
+  assert_non_null(header);
+  memcpy(header, data, header_len);
+  header[header_len] = '\0';
+  assert_true(strncmp(header, "NRRD0004\n", 9) == 0);
+  assert_true(has_line(header, "type: float"));
+  assert_true(has_line(header, "dimension: 3"));
+  assert_true(has_line(header, "sizes: 4 3 3"));
+  assert_true(has_line(header, "space dimension: 3"));
+  assert_true(has_line(header, "space directions: (0.5,0,0) (0,0.25,0) (0,0,2.5)"));
+  assert_true(has_line(header, "space origin: (-1.5,0,3.25)"));
+  assert_true(has_line(header, "kinds: domain domain domain"));
+  assert_true(has_line(header, "endian: little"));
+  assert_true(has_line(header, "encoding: raw"));
+  assert_null(strstr(header, "space:"));
+  /* every line is a field, a comment or the final blank line */
+  for (const char *p = header + 9; *p && p[0] != '\n'; p = strchr(p, '\n') + 1) {
+    const char *colon = strstr(p, ": ");
+    assert_true(p[0] == '#' || (colon && colon < strchr(p, '\n')));
+  }
+  free(header);
+
+  for (int z = 0; z < NZ; ++z)
+    for (int k = 0; k < NX * NY; ++k) {
+      uint32_t want;
+      memcpy(&want, &vals[z][k], sizeof want);
+      uint32_t got = le32(data + header_len + 4 * ((size_t)z * NX * NY + (size_t)k));
+      if (got != want) fail_msg("float %d,%d: got 0x%08x, want 0x%08x", z, k, got, want);
+    }
+  free(data);
+}
+
+static void test_nrrd_fixed_header(void **state) {
+  /* the header length does not depend on the numbers in it */
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "one.nrrd");
+  float slice[2] = {1.0f, 2.0f};
+  size_t lengths[2];
+  for (int pass = 0; pass < 2; ++pass) {
+    lsm_nrrd_writer *w = NULL;
+    lsm_err err;
+    lsm_err_clear(&err);
+    double s = pass ? 0.1234567890123456789e-300 : 1.0;
+    assert_int_equal(lsm_nrrd_open(path, 2, 1, s, s, s, -s, -s, -s, &w, &err), LSM_OK);
+    for (int z = 0; z < (pass ? 12 : 1); ++z) assert_int_equal(lsm_nrrd_write_slice(w, slice, &err), LSM_OK);
+    if (lsm_nrrd_finish(&w, pass ? -1.0 / 3.0 * -1e300 : 1.0, &err) != LSM_OK) fail_msg("%s", err.msg);
+    size_t len;
+    uint8_t *data = read_bytes(path, &len);
+    lengths[pass] = len - (pass ? 12u : 1u) * 8u;
+    if (pass) assert_true(has_line((const char *)data, "sizes: 2 1 12"));
+    free(data);
+  }
+  assert_int_equal(lengths[0], lengths[1]);
+}
+
+static void test_nrrd_errors(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  lsm_nrrd_writer *w = NULL;
+  lsm_err err;
+
+  join(path, sizeof path, f->dir, "no/such/dir/v.nrrd");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_nrrd_open(path, 4, 3, 1, 1, 1, 0, 0, 0, &w, &err), LSM_ERR_IO);
+  assert_null(w);
+  assert_msg_contains(err, path);
+
+  join(path, sizeof path, f->dir, "v.nrrd");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_nrrd_open(path, 0, 3, 1, 1, 1, 0, 0, 0, &w, &err), LSM_ERR_INPUT);
+  assert_null(w);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_nrrd_open(path, 4, 3, 1, NAN, 1, 0, 0, 0, &w, &err), LSM_ERR_INPUT);
+  assert_null(w);
+
+  /* finishing with no slices is refused */
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_nrrd_open(path, 4, 3, 1, 1, 1, 0, 0, 0, &w, &err), LSM_OK);
+  assert_int_equal(lsm_nrrd_finish(&w, 1.0, &err), LSM_ERR_INPUT);
+  assert_null(w);
+  assert_msg_contains(err, path);
+
+  /* abort frees everything (valgrind checks) */
+  float slice[12] = {0};
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_nrrd_open(path, 4, 3, 1, 1, 1, 0, 0, 0, &w, &err), LSM_OK);
+  assert_int_equal(lsm_nrrd_write_slice(w, slice, &err), LSM_OK);
+  lsm_nrrd_abort(&w);
+  assert_null(w);
+  lsm_nrrd_abort(&w); /* twice is harmless */
+
+  struct stat sb;
+  if (stat("/dev/full", &sb) == 0 && S_ISCHR(sb.st_mode)) {
+    lsm_err_clear(&err);
+    lsm_status st = lsm_nrrd_open("/dev/full", 4, 3, 1, 1, 1, 0, 0, 0, &w, &err);
+    for (int z = 0; st == LSM_OK && z < 3; ++z) st = lsm_nrrd_write_slice(w, slice, &err);
+    if (st == LSM_OK) st = lsm_nrrd_finish(&w, 1.0, &err);
+    else lsm_nrrd_abort(&w);
+    assert_int_equal(st, LSM_ERR_IO);
+    assert_null(w);
+    assert_msg_contains(err, "/dev/full");
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_natural_cmp),
+      cmocka_unit_test(test_heights_good),
+      cmocka_unit_test(test_heights_bad),
+      cmocka_unit_test_setup_teardown(test_heights_read, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_roundtrip_mask, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_roundtrip_gray_rgb, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_gray1, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_gray2_4, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_gray8, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_gray16, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_gray_trns, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_gray_alpha, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_rgb, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_rgba, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_palette, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_interlaced, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_invert, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_max_pixels, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_not_png, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_truncated, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_corrupt, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_write_errors, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_dir_list, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_dir_errors, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_make_dir, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_read_file, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_nrrd_roundtrip, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_nrrd_fixed_header, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_nrrd_errors, setup_tmp, teardown_tmp),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
