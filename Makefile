@@ -26,9 +26,9 @@ OPT     += -march=native
 endif
 CFLAGS  ?=
 CFLAGS  += -std=c17 $(WARN) $(OPT) -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP
-LDLIBS  += -lpng -lz -lm -fopenmp
+LDLIBS  += -lpng -lz -lm -lOpenEXRCore -fopenmp
 
-DEBIAN_PACKAGES := gcc make pkg-config libpng-dev zlib1g-dev libcmocka-dev python3 python3-numpy python3-matplotlib
+DEBIAN_PACKAGES := gcc make pkg-config libpng-dev zlib1g-dev libcmocka-dev python3 python3-numpy python3-matplotlib libopenexr-dev python3-vtk9 openimageio-tools
 DEPS_STAMP := $(BUILD)/.deps-ok
 
 LIB_SRC := $(wildcard solver/lsm_*.c) $(wildcard io/*.c) $(wildcard kernels/*.c)

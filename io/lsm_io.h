@@ -4,6 +4,11 @@
  *   io_dir.c      natural-order listing of the PNG files of a folder
  *   io_heights.c  the heights text file
  *   io_nrrd.c     streaming NRRD volume writer (attached header, raw float LE)
+ *   io_volume.c   streaming writer for every selected volume format at once
+ *   io_mha.c      MetaImage header (volume.mha)
+ *   io_vtk.c      legacy VTK header (volume.vtk)
+ *   io_raw.c      JSON sidecar of volume.raw
+ *   io_exr.c      one OpenEXR file per slice (OpenEXRCore C API)
  *
  * Every function returns an lsm_status and records "<file>: <what>" in err.
  */
@@ -100,5 +105,94 @@ lsm_status lsm_make_dir(const char *path, lsm_err *err);
  * larger than max_bytes. */
 lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t *length,
                          lsm_err *err);
+
+/* ---- volumes in several formats (io_volume.c, io_mha.c, io_vtk.c, io_raw.c, io_exr.c) ---- */
+
+/* Output formats, as bits of a set. */
+#define LSM_FORMAT_NRRD 0x01u /* volume.nrrd: attached header, raw little endian */
+#define LSM_FORMAT_MHA 0x02u  /* volume.mha: MetaImage, ElementDataFile = LOCAL */
+#define LSM_FORMAT_VTK 0x04u  /* volume.vtk: legacy BINARY STRUCTURED_POINTS, big endian */
+#define LSM_FORMAT_EXR 0x08u  /* exr/00001.exr ...: one OpenEXR scanline file per slice */
+#define LSM_FORMAT_RAW 0x10u  /* volume.raw + volume.json sidecar, little endian */
+#define LSM_FORMAT_ALL 0x1fu
+
+/* What the volume holds: the signed distance (float32, physical units,
+ * negative inside) or a mask (uint8, 255 where phi <= 0, else 0; in EXR
+ * files a half-float 1.0 / 0.0). */
+typedef enum lsm_values {
+  LSM_VALUES_UNKNOWN = -1,
+  LSM_VALUES_SDF,
+  LSM_VALUES_MASK,
+  LSM_VALUES_COUNT
+} lsm_values;
+
+const char *lsm_values_name(lsm_values v);
+lsm_values lsm_values_from_name(const char *name);
+/* Name of one format bit ("nrrd"), or "unknown". */
+const char *lsm_format_name(unsigned format);
+/* Parses a comma-separated list ("nrrd,mha,vtk,exr,raw", any order, repeats
+ * allowed) into a set of LSM_FORMAT_* bits; LSM_ERR_USAGE on an empty list or
+ * an unknown name. */
+lsm_status lsm_format_list_parse(const char *list, unsigned *formats, lsm_err *err);
+/* The names, relative to the output folder, of the files (folders end in '/')
+ * the given formats write, in a fixed order; returns how many (at most 6),
+ * storing at most cap of them in names. */
+size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap);
+
+/* Geometry and sample type of a volume: nx x ny x nz samples, x fastest,
+ * sample (i, j, k) centred at (ox + i sx, oy + j sy, oz + k sz). */
+typedef struct lsm_volume_info {
+  int nx, ny;
+  size_t nz;
+  double sx, sy, sz;
+  double ox, oy, oz;
+  lsm_values values;
+} lsm_volume_info;
+
+/* Fixed-length headers: the length depends neither on nz nor on sz (those
+ * are printed in fixed-width fields), so a header written with a provisional
+ * slice count can be rewritten in place once the count is known.  Each writes
+ * the header and a NUL into out and returns its length, or 0 if cap is too
+ * small. */
+size_t lsm_mha_header(char *out, size_t cap, const lsm_volume_info *info);
+size_t lsm_vtk_header(char *out, size_t cap, const lsm_volume_info *info);
+
+/* Writes the JSON sidecar of a raw volume (sizes, spacing, origin, dtype,
+ * endianness, data file name). */
+lsm_status lsm_raw_write_json(const char *path, const char *data_file,
+                              const lsm_volume_info *info, lsm_err *err);
+
+/* Writes one slice (info->nx x info->ny values of phi, row 0 first) as a
+ * single-channel ("Y") scanline OpenEXR file, ZIP compressed: float32 phi
+ * for LSM_VALUES_SDF, half 1.0 (phi <= 0) / 0.0 for LSM_VALUES_MASK.  The
+ * header carries the pixel size ("pixelSize", v2d: sx, sy), the slice height
+ * ("sliceHeight", double), the slice number ("sliceIndex", int, from 1) and
+ * "values" ("sdf" or "mask"); pixelAspectRatio is sx / sy. */
+lsm_status lsm_exr_write_slice(const char *path, const float *phi, const lsm_volume_info *info,
+                               double z, size_t index, lsm_err *err);
+
+/* A streaming writer for every selected format at once: slices go out as
+ * they come (memory: a few slices), headers with the slice count are fixed
+ * at the end. */
+typedef struct lsm_volume_writer lsm_volume_writer;
+
+/* Creates dir/volume.<ext> for each selected format (and dir/exr/ for EXR)
+ * for nx x ny slices with pixel spacings sx, sy, provisional slice spacing
+ * sz and first-sample origin (ox, oy, oz). */
+lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values values, int nx,
+                                  int ny, double sx, double sy, double sz, double ox, double oy,
+                                  double oz, lsm_volume_writer **out, lsm_err *err);
+/* Appends one slice: nx*ny floats of phi (row-major, row 0 first) at height z. */
+lsm_status lsm_volume_writer_write_slice(lsm_volume_writer *w, const float *phi, double z,
+                                         lsm_err *err);
+/* Number of slices written so far. */
+size_t lsm_volume_writer_slices(const lsm_volume_writer *w);
+/* Fixes every header with the final z spacing sz and slice count (which must
+ * equal the number of slices written), writes the raw sidecar, closes every
+ * file (checking each write and close) and frees the writer. */
+lsm_status lsm_volume_writer_finish(lsm_volume_writer **w, double sz, size_t count,
+                                    lsm_err *err);
+/* Closes everything without finishing (after an error); harmless on NULL. */
+void lsm_volume_writer_abort(lsm_volume_writer **w);
 
 #endif

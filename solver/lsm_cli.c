@@ -62,9 +62,16 @@ static const char reconstruct_help[] =
     "                         (default 0.25; the norm is over all cells, so CP grows\n"
     "                         with the square root of the cell count: scale T with it)\n"
     "  --max-iter N           most solver steps per pair (default 100000)\n"
-    "  --align hull|none      hull (default): move each slice's convex-hull centroid to\n"
-    "                         the image centre before morphing and move intermediate\n"
-    "                         slices back along the straight line between the centroids\n"
+    "  --interp linear|cubic  z-profile through the slices (default cubic): cubic adds to\n"
+    "                         each gap's morph the departure of a monotone cubic (PCHIP)\n"
+    "                         through the four nearest slices from the straight line,\n"
+    "                         so surfaces are C1 across input slices, without overshoot\n"
+    "  --align auto|hull|none hull: move each slice's convex-hull centroid to the image\n"
+    "                         centre before morphing and move intermediate slices back\n"
+    "                         along the line (or monotone cubic) through the centroids;\n"
+    "                         auto (default): hull for a pair only when that shift makes\n"
+    "                         the two slices overlap more (the shape moved rather than\n"
+    "                         changed); none: no alignment\n"
     "\n"
     "Running:\n"
     "  --threads N            threads for the grid loops (default: all cores)\n"
@@ -237,10 +244,14 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       NEEDS_VALUE();
       LSM_TRY(parse_int(name, v, 1, INT_MAX, &n, err));
       so->max_iter = (int)n;
+    } else if (IS("--interp")) {
+      NEEDS_VALUE();
+      if ((so->interp = lsm_interp_from_name(v)) == LSM_INTERP_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--interp: '%s' is not one of linear, cubic", v);
     } else if (IS("--align")) {
       NEEDS_VALUE();
       if ((so->align = lsm_align_from_name(v)) == LSM_ALIGN_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--align: '%s' is not one of hull, none", v);
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--align: '%s' is not one of auto, hull, none", v);
     } else if (IS("--threads")) {
       NEEDS_VALUE();
       LSM_TRY(parse_int(name, v, 1, 4096, &n, err));

@@ -6,6 +6,11 @@
 
 #include "lsm_sdf.h"
 
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
 static void boundary(const lsm_mask *m, uint8_t *b) {
   const int w = m->width, h = m->height;
   for (int y = 0; y < h; ++y)
@@ -19,13 +24,28 @@ static void boundary(const lsm_mask *m, uint8_t *b) {
     }
 }
 
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
+
+static lsm_status append(double **dist, size_t *n, size_t *cap, double v, lsm_err *err) {
+  if (*n == *cap) {
+    size_t next = *cap ? 2 * *cap : 4096;
+    double *p = realloc(*dist, next * sizeof *p);
+    if (!p) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot grow the distance list");
+    *dist = p;
+    *cap = next;
+  }
+  (*dist)[(*n)++] = v;
+  return LSM_OK;
+}
+
+double lsm_quantile(double *values, size_t n, double q) {
+  if (n == 0) return NAN;
+  qsort(values, n, sizeof *values, cmp_double);
+  size_t rank = (size_t)ceil(q * (double)n);
+  return values[rank ? rank - 1 : 0];
 }
 
 lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_slice_score *out,
-                           lsm_err *err) {
+                           double **dist, size_t *dn, size_t *dcap, lsm_err *err) {
   memset(out, 0, sizeof *out);
   if (result->width != truth->width || result->height != truth->height)
     return lsm_fail(err, LSM_ERR_INPUT, NULL, "slice sizes differ (%dx%d vs %dx%d)", result->width,
@@ -46,6 +66,18 @@ lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_sl
   if (!out->area_result || !out->area_truth) {
     out->comparable = 0;
     out->hd95 = out->hd_max = out->mean_surface = INFINITY;
+    if (dist) {
+      const lsm_mask *full = out->area_result ? result : truth;
+      uint8_t *b = malloc(n);
+      if (!b) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate scoring buffers");
+      boundary(full, b);
+      const double penalty = truth->width > truth->height ? truth->width : truth->height;
+      lsm_status st = LSM_OK;
+      for (size_t k = 0; st == LSM_OK && k < n; ++k)
+        if (b[k]) st = append(dist, dn, dcap, penalty, err);
+      free(b);
+      return st;
+    }
     return LSM_OK;
   }
   out->comparable = 1;
@@ -67,6 +99,7 @@ lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_sl
     if (br[k]) all[m++] = sqrt(dt[k]);
     if (bt[k]) all[m++] = sqrt(dr[k]);
   }
+  for (size_t k = 0; dist && st == LSM_OK && k < m; ++k) st = append(dist, dn, dcap, all[k], err);
   qsort(all, m, sizeof *all, cmp_double);
   for (size_t k = 0; k < m; ++k) total += all[k];
   out->mean_surface = m ? total / (double)m : 0.0;

@@ -16,8 +16,15 @@ typedef struct lsm_slice_score {
 } lsm_slice_score;
 
 /* Boundary pixels: inside pixels with a 4-neighbour outside (or on the image
- * border).  Distances are between boundary pixel centres, in pixels. */
+ * border).  Distances are between boundary pixel centres, in pixels.
+ * When dist is non-NULL, every boundary-to-boundary distance (both directions)
+ * is appended to the growable array *dist (*n used, *cap allocated); when
+ * exactly one of the two slices is empty, each boundary pixel of the other is
+ * appended with the penalty max(width, height). */
 lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_slice_score *out,
-                           lsm_err *err);
+                           double **dist, size_t *n, size_t *cap, lsm_err *err);
+
+/* q-quantile (0..1, nearest rank) of values (sorted in place). */
+double lsm_quantile(double *values, size_t n, double q);
 
 #endif

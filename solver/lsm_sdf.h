@@ -49,7 +49,8 @@ lsm_status lsm_sdf_from_outline(const lsm_mask *outline, lsm_grid *phi, lsm_err 
 /* Centroid (cx, cy) in pixel coordinates (column, row; pixel centres at
  * integers) of the convex hull of the pixel centres with mask != 0 (area
  * centroid of the hull polygon; degenerate hulls — one pixel, a segment —
- * give the centroid of their points).  Returns 0 for an empty mask, 1 otherwise. */
+ * give the centroid of their points).  Returns 0 for an empty mask, 1 otherwise,
+ * -1 (cx, cy NaN) when its scratch memory cannot be allocated. */
 int lsm_hull_centroid(const lsm_mask *mask, double *cx, double *cy);
 
 #endif

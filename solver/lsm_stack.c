@@ -14,7 +14,8 @@
 
 static const char *const method_names[LSM_METHOD_COUNT] = {"ls", "blend"};
 static const char *const input_names[LSM_INPUT_COUNT] = {"mask", "outline"};
-static const char *const align_names[LSM_ALIGN_COUNT] = {"hull", "none"};
+static const char *const align_names[LSM_ALIGN_COUNT] = {"hull", "none", "auto"};
+static const char *const interp_names[LSM_INTERP_COUNT] = {"linear", "cubic"};
 
 static int name_index(const char *const *names, int count, const char *name) {
   for (int k = 0; k < count; ++k)
@@ -41,10 +42,18 @@ lsm_align lsm_align_from_name(const char *name) {
   return (lsm_align)name_index(align_names, LSM_ALIGN_COUNT, name);
 }
 
+const char *lsm_interp_name(lsm_interp i) {
+  return i > LSM_INTERP_UNKNOWN && i < LSM_INTERP_COUNT ? interp_names[i] : "unknown";
+}
+lsm_interp lsm_interp_from_name(const char *name) {
+  return (lsm_interp)name_index(interp_names, LSM_INTERP_COUNT, name);
+}
+
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
   opts->method = LSM_METHOD_LS;
   opts->input = LSM_INPUT_MASK;
-  opts->align = LSM_ALIGN_HULL;
+  opts->align = LSM_ALIGN_AUTO;
+  opts->interp = LSM_INTERP_CUBIC;
   opts->pixel_size = 1.0;
   opts->dz = 0.0;
   opts->per_iteration = 0;
@@ -96,7 +105,12 @@ static lsm_status slice_load(const lsm_slice_source *src, size_t index, int widt
   } else {
     s->filled = s->raw;
   }
-  s->empty = !lsm_hull_centroid(&s->filled, &s->cx, &s->cy);
+  int hull = lsm_hull_centroid(&s->filled, &s->cx, &s->cy);
+  if (hull < 0) {
+    slice_free(s);
+    return lsm_fail(err, LSM_ERR_NOMEM, name, "cannot allocate the convex hull");
+  }
+  s->empty = hull == 0;
   s->loaded = 1;
   return LSM_OK;
 }
@@ -121,40 +135,141 @@ static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy
   return st;
 }
 
+/* ---- monotone cubic (PCHIP) ------------------------------------------------------------- */
+
+/* Fritsch–Carlson slope at a knot between intervals of lengths h0, h1 with
+ * secants d0, d1 (the weighted harmonic mean of Fritsch & Butland, as in
+ * Moler's pchip): zero at a local extremum, so the Hermite cubic stays within
+ * the range of its two knots — no overshoot. */
+static inline float pchip_slope(float h0, float h1, float d0, float d1) {
+  if (d0 * d1 <= 0.0f) return 0.0f;
+  const float w1 = 2.0f * h1 + h0, w2 = h1 + 2.0f * h0;
+  return (w1 + w2) / (w1 / d0 + w2 / d1);
+}
+
+/* Cubic Hermite basis on s in [0, 1]. */
+static void hermite_basis(double s, double *h00, double *h10, double *h01, double *h11) {
+  const double s2 = s * s, s3 = s2 * s;
+  *h00 = 2 * s3 - 3 * s2 + 1;
+  *h10 = s3 - 2 * s2 + s;
+  *h01 = -2 * s3 + 3 * s2;
+  *h11 = s3 - s2;
+}
+
+/* The four input slices around a gap: prev, A, B, next (prev/next may be
+ * absent) with their heights. */
+typedef struct window {
+  const slice *s[4];
+  double z[4];
+} window;
+
+/* A neighbour takes part in the spline only if it exists and is not empty. */
+static int window_usable(const window *w, int k) { return w->s[k] && w->s[k]->loaded && !w->s[k]->empty; }
+
 /* ---- the pair's working frame ------------------------------------------------------------- */
 
 typedef struct frame {
   int width, height;     /* image size */
   int pad;               /* canvas margin on every side */
-  int dax, day, dbx, dby; /* whole-pixel shifts of A and B (centroid - centre) */
+  int dx[4], dy[4];      /* whole-pixel shifts (centroid - centre) of prev, A, B, next */
+  double H;              /* height of the gap, z_B - z_A */
+  double mx[2], my[2];   /* slopes of the shift path at A and B, per unit z */
   float clamp;           /* |phi| written out is at most this */
 } frame;
 
-static void frame_setup(frame *f, const slice *a, const slice *b, lsm_align align, int width,
+/* Pixels of a that are inside b once a is moved by (dx, dy). */
+static size_t overlap(const lsm_mask *a, const lsm_mask *b, int dx, int dy) {
+  size_t count = 0;
+  for (int y = 0; y < a->height; ++y) {
+    const int yb = y + dy;
+    if (yb < 0 || yb >= b->height) continue;
+    const uint8_t *pa = a->pixels + (size_t)y * a->width, *pb = b->pixels + (size_t)yb * b->width;
+    for (int x = 0; x < a->width; ++x) {
+      const int xb = x + dx;
+      if (xb >= 0 && xb < b->width) count += pa[x] && pb[xb];
+    }
+  }
+  return count;
+}
+
+/* --align auto: hull alignment for this pair only when the two shapes overlap
+ * little in place (intersection over union below 1/2: the morph alone would
+ * shrink one and grow the other rather than move it) and moving A by the
+ * centroid difference makes them overlap more. */
+static lsm_align resolve_align(lsm_align align, const slice *a, const slice *b, int width,
+                               int height) {
+  if (align != LSM_ALIGN_AUTO) return align;
+  if (a->empty || b->empty) return LSM_ALIGN_NONE;
+  const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
+  const int dx = (int)lround(b->cx - cx) - (int)lround(a->cx - cx);
+  const int dy = (int)lround(b->cy - cy) - (int)lround(a->cy - cy);
+  if (dx == 0 && dy == 0) return LSM_ALIGN_NONE;
+  const size_t in_place = overlap(&a->filled, &b->filled, 0, 0);
+  const size_t area = lsm_mask_count(&a->filled) + lsm_mask_count(&b->filled);
+  const double iou = (double)in_place / (double)(area - in_place);
+  if (iou >= 0.5) return LSM_ALIGN_NONE;
+  return overlap(&a->filled, &b->filled, dx, dy) > in_place ? LSM_ALIGN_HULL : LSM_ALIGN_NONE;
+}
+
+static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp interp, int width,
                         int height, double pixel) {
+  memset(f, 0, sizeof *f);
+  align = resolve_align(align, w->s[1], w->s[2], width, height);
   f->width = width;
   f->height = height;
-  f->dax = f->day = f->dbx = f->dby = 0;
+  f->H = w->z[2] - w->z[1];
+  const slice *a = w->s[1], *b = w->s[2];
   if (align == LSM_ALIGN_HULL && !(a->empty && b->empty)) {
-    const double mx = 0.5 * (width - 1), my = 0.5 * (height - 1);
-    const slice *ra = a->empty ? b : a, *rb = b->empty ? a : b;
-    f->dax = (int)lround(ra->cx - mx);
-    f->day = (int)lround(ra->cy - my);
-    f->dbx = (int)lround(rb->cx - mx);
-    f->dby = (int)lround(rb->cy - my);
+    const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
+    for (int k = 0; k < 4; ++k) {
+      const slice *sk = w->s[k];
+      if (k == 1 && a->empty) sk = b; /* an empty end does not move */
+      if (k == 2 && b->empty) sk = a;
+      if (!sk || !sk->loaded || sk->empty) continue;
+      f->dx[k] = (int)lround(sk->cx - cx);
+      f->dy[k] = (int)lround(sk->cy - cy);
+    }
   }
-  int m = abs(f->dax);
-  if (abs(f->day) > m) m = abs(f->day);
-  if (abs(f->dbx) > m) m = abs(f->dbx);
-  if (abs(f->dby) > m) m = abs(f->dby);
+  /* Slopes of the centroid path: secant (linear), or PCHIP through the
+   * neighbouring slices' centroids (cubic). */
+  const double sx = (f->dx[2] - f->dx[1]) / f->H, sy = (f->dy[2] - f->dy[1]) / f->H;
+  f->mx[0] = f->mx[1] = sx;
+  f->my[0] = f->my[1] = sy;
+  if (interp == LSM_INTERP_CUBIC && align == LSM_ALIGN_HULL && !a->empty && !b->empty) {
+    if (window_usable(w, 0)) {
+      const double h0 = w->z[1] - w->z[0];
+      f->mx[0] = pchip_slope((float)h0, (float)f->H, (float)((f->dx[1] - f->dx[0]) / h0), (float)sx);
+      f->my[0] = pchip_slope((float)h0, (float)f->H, (float)((f->dy[1] - f->dy[0]) / h0), (float)sy);
+    }
+    if (window_usable(w, 3)) {
+      const double h1 = w->z[3] - w->z[2];
+      f->mx[1] = pchip_slope((float)f->H, (float)h1, (float)sx, (float)((f->dx[3] - f->dx[2]) / h1));
+      f->my[1] = pchip_slope((float)f->H, (float)h1, (float)sy, (float)((f->dy[3] - f->dy[2]) / h1));
+    }
+  }
+  int m = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (abs(f->dx[k]) > m) m = abs(f->dx[k]);
+    if (abs(f->dy[k]) > m) m = abs(f->dy[k]);
+  }
   f->pad = m + 2;
   f->clamp = (float)(pixel * hypot((double)width, (double)height));
 }
 
+/* The alignment shift at fraction s: the Hermite curve through the shifts of
+ * A and B with the slopes above (a straight segment for linear). */
+static void frame_shift(const frame *f, double s, double *shx, double *shy) {
+  double h00, h10, h01, h11;
+  hermite_basis(s, &h00, &h10, &h01, &h11);
+  *shx = h00 * f->dx[1] + h10 * f->H * f->mx[0] + h01 * f->dx[2] + h11 * f->H * f->mx[1];
+  *shy = h00 * f->dy[1] + h10 * f->H * f->my[0] + h01 * f->dy[2] + h11 * f->H * f->my[1];
+}
+
 /* Writes the slice at fraction s from the working field into out (width x
- * height), undoing the alignment shift (1 - s) d_A + s d_B. */
+ * height), undoing the alignment shift. */
 static void frame_extract(const frame *f, const lsm_grid *work, double s, float *out) {
-  const double shx = (1.0 - s) * f->dax + s * f->dbx, shy = (1.0 - s) * f->day + s * f->dby;
+  double shx, shy;
+  frame_shift(f, s, &shx, &shy);
   const double ox = f->pad - shx, oy = f->pad - shy;
   const int whole = ox == floor(ox) && oy == floor(oy);
   for (int y = 0; y < f->height; ++y)
@@ -192,34 +307,78 @@ static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
 static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double z, lsm_err *err) {
   LSM_TRY(slice_phi(s, r->opts->input, 0, 0, r->image_phi, err));
   frame f;
-  frame_setup(&f, s, s, LSM_ALIGN_NONE, r->width, r->height, r->opts->pixel_size);
+  window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}};
+  frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height, r->opts->pixel_size);
   f.pad = 0;
   frame_extract(&f, r->image_phi, 0.0, r->out);
   return emit(r, z, (long)index, err);
 }
 
-/* The working fields of one gap: phi_A and phi_B on the padded canvas, with
- * empty slices replaced by the constant target described in lsm_stack.h. */
+/* The working fields of one gap: phi_A and phi_B on the padded canvas, each
+ * slice centred by its own shift, and — for the cubic profile — the PCHIP
+ * slopes dphi/dz at A and B from the neighbouring slices (NULL for linear). */
 typedef struct gap {
   frame f;
   lsm_grid *phi_a, *phi_b;
+  lsm_grid *slope_a, *slope_b;
 } gap;
 
 static void gap_free(gap *g) {
   lsm_grid_destroy(&g->phi_a);
   lsm_grid_destroy(&g->phi_b);
+  lsm_grid_destroy(&g->slope_a);
+  lsm_grid_destroy(&g->slope_b);
 }
 
-static lsm_status gap_setup(stack_run *r, const slice *a, const slice *b, gap *g, lsm_err *err) {
+/* Per-pixel PCHIP slopes at A and B.  A missing or empty neighbour leaves the
+ * secant (the spline is then linear at that end). */
+static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err) {
+  const lsm_stack_opts *o = r->opts;
+  lsm_grid *nb = NULL;
+  LSM_TRY(lsm_grid_clone(g->phi_a, &g->slope_a, err));
+  LSM_TRY(lsm_grid_clone(g->phi_a, &g->slope_b, err));
+  LSM_TRY(lsm_grid_clone(g->phi_a, &nb, err));
+  const float H = (float)g->f.H;
+  lsm_status st = LSM_OK;
+  for (int side = 0; side < 2 && st == LSM_OK; ++side) {
+    const int k = side ? 3 : 0; /* the neighbour: next for B, prev for A */
+    const int usable = window_usable(w, k);
+    if (usable)
+      st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad - g->f.dy[k], nb, err);
+    if (st != LSM_OK) break;
+    const float hn = usable ? (float)fabs(w->z[k] - w->z[side ? 2 : 1]) : 1.0f;
+    lsm_grid *m = side ? g->slope_b : g->slope_a;
+    for (int j = 0; j < m->ny; ++j) {
+      const float *pa = &LSM_AT(g->phi_a, 0, j), *pb = &LSM_AT(g->phi_b, 0, j), *pn = &LSM_AT(nb, 0, j);
+      float *pm = &LSM_AT(m, 0, j);
+      for (int i = 0; i < m->nx; ++i) {
+        const float d = (pb[i] - pa[i]) / H;
+        if (!usable)
+          pm[i] = d;
+        else if (side)
+          pm[i] = pchip_slope(H, hn, d, (pn[i] - pb[i]) / hn);
+        else
+          pm[i] = pchip_slope(hn, H, (pa[i] - pn[i]) / hn, d);
+      }
+    }
+  }
+  lsm_grid_destroy(&nb);
+  return st;
+}
+
+static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err) {
   memset(g, 0, sizeof *g);
   const lsm_stack_opts *o = r->opts;
-  frame_setup(&g->f, a, b, o->align, r->width, r->height, o->pixel_size);
+  const slice *a = w->s[1], *b = w->s[2];
+  frame_setup(&g->f, w, o->align, o->interp, r->width, r->height, o->pixel_size);
   const int nx = r->width + 2 * g->f.pad, ny = r->height + 2 * g->f.pad;
   const float h = (float)o->pixel_size;
   lsm_status st = lsm_grid_create(nx, ny, h, h, &g->phi_a, err);
   if (st == LSM_OK) st = lsm_grid_create(nx, ny, h, h, &g->phi_b, err);
-  if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dax, g->f.pad - g->f.day, g->phi_a, err);
-  if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dbx, g->f.pad - g->f.dby, g->phi_b, err);
+  if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad - g->f.dy[1], g->phi_a, err);
+  if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad - g->f.dy[2], g->phi_b, err);
+  if (st == LSM_OK && o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration)
+    st = gap_slopes(r, w, g, err);
   if (st != LSM_OK) {
     gap_free(g);
     return st;
@@ -234,6 +393,27 @@ static lsm_status gap_setup(stack_run *r, const slice *a, const slice *b, gap *g
   return LSM_OK;
 }
 
+/* Adds the monotone cubic's departure from the linear interpolant at s:
+ *   Phi_cubic(s) - Phi_linear(s) = H [h10(s) (m_A - delta) + h11(s) (m_B - delta)],
+ * delta = (phi_B - phi_A) / H.  It vanishes at s = 0 and 1, and its s-slope
+ * there makes the z-slope of the result the PCHIP slope m — the same on both
+ * sides of an input slice, so the profile is C1 across slices. */
+static void gap_add_cubic(const gap *g, double s, lsm_grid *field) {
+  if (!g->slope_a) return;
+  double h00, h10, h01, h11;
+  hermite_basis(s, &h00, &h10, &h01, &h11);
+  const float H = (float)g->f.H, c10 = (float)h10 * H, c11 = (float)h11 * H;
+  for (int j = 0; j < field->ny; ++j) {
+    const float *pa = &LSM_AT(g->phi_a, 0, j), *pb = &LSM_AT(g->phi_b, 0, j);
+    const float *ma = &LSM_AT(g->slope_a, 0, j), *mb = &LSM_AT(g->slope_b, 0, j);
+    float *o = &LSM_AT(field, 0, j);
+    for (int i = 0; i < field->nx; ++i) {
+      const float d = (pb[i] - pa[i]) / H;
+      o[i] += c10 * (ma[i] - d) + c11 * (mb[i] - d);
+    }
+  }
+}
+
 /* Erosion depth of the object at fraction sigma of a gap that runs from a
  * non-empty slice (sigma = 0, deepest point at depth R) to an empty one.
  * ls:    a paraboloid cap, radius R sqrt(1 - 2 sigma): cross-sections of a smooth
@@ -246,25 +426,67 @@ static double cap_depth(lsm_method method, double R, double sigma) {
   return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
 }
 
-/* A gap with exactly one empty side: the non-empty slice's phi raised by the
- * cap depth.  For a signed distance phi, phi + e is the exact level-set
- * solution of a uniform inward motion by e (its zero set is the erosion by e). */
-static lsm_status run_gap_cap(stack_run *r, gap *g, int a_empty, const double *zs,
-                              const double *fs, size_t n, lsm_pair_stats *ps, lsm_err *err) {
+/* A gap with exactly one empty side.
+ * Linear profile: the non-empty slice's phi raised by the cap depth; for a
+ * signed distance phi, phi + e is the exact level-set solution of a uniform
+ * inward motion by e (its zero set is the erosion by e).
+ * Cubic profile: per pixel, the monotone cubic through the slice beyond the
+ * non-empty one (when there is one), the non-empty slice, and a virtual slice
+ * phi + 2R at the empty one, so the end continues the trend of the slices
+ * above it (C1 at the non-empty slice: a shape that is not shrinking stays
+ * full longer, a shrinking one keeps shrinking); the object is cut off at
+ * mid-gap (sigma >= 1/2 is empty), so the halfway rule holds either way. */
+static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty,
+                              const double *zs, const double *fs, size_t n, lsm_pair_stats *ps,
+                              lsm_err *err) {
+  const lsm_stack_opts *o = r->opts;
   const lsm_grid *full = a_empty ? g->phi_b : g->phi_a;
-  lsm_grid *work = NULL;
+  const int kn = a_empty ? 3 : 0, kf = a_empty ? 2 : 1; /* beyond, and the full slice */
+  lsm_grid *work = NULL, *slope = NULL;
   LSM_TRY(lsm_grid_clone(full, &work, err));
   const double R = fmax(-(double)lsm_grid_min(full), 0.5 * full->dx);
+  const float H = (float)g->f.H, d_gap = (float)(2.0 * R / g->f.H);
   lsm_status st = LSM_OK;
+  const int cubic = o->interp == LSM_INTERP_CUBIC;
+  if (cubic) {
+    /* slope of phi per unit height, moving from the full slice toward the empty one */
+    st = lsm_grid_clone(full, &slope, err);
+    lsm_grid *nb = NULL;
+    if (st == LSM_OK && window_usable(w, kn)) {
+      st = lsm_grid_clone(full, &nb, err);
+      if (st == LSM_OK)
+        st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad - g->f.dy[kn], nb, err);
+    }
+    if (st == LSM_OK) {
+      const float hn = nb ? (float)fabs(w->z[kn] - w->z[kf]) : 1.0f;
+      for (int j = 0; j < slope->ny; ++j)
+        for (int i = 0; i < slope->nx; ++i)
+          LSM_AT(slope, i, j) =
+              nb ? pchip_slope(hn, H, (LSM_AT(full, i, j) - LSM_AT(nb, i, j)) / hn, d_gap) : d_gap;
+    }
+    lsm_grid_destroy(&nb);
+  }
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
     const double sigma = a_empty ? 1.0 - fs[k] : fs[k];
-    const float e = (float)cap_depth(r->opts->method, R, sigma);
-    for (int j = 0; j < work->ny; ++j)
-      for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + e;
+    if (cubic) {
+      double h00, h10, h01, h11;
+      hermite_basis(sigma, &h00, &h10, &h01, &h11);
+      /* phi(sigma) = h00 phi + h10 H m + h01 (phi + 2R) + h11 H d_gap, with h00 + h01 = 1 */
+      const float c_up = (float)(h01 * 2.0 * R + h11 * H * d_gap), c_m = (float)(h10 * H);
+      const float floor_value = sigma >= 0.5 ? 1e-3f * full->dx : -INFINITY;
+      for (int j = 0; j < work->ny; ++j)
+        for (int i = 0; i < work->nx; ++i)
+          LSM_AT(work, i, j) = fmaxf(LSM_AT(full, i, j) + c_up + c_m * LSM_AT(slope, i, j), floor_value);
+    } else {
+      const float e = (float)cap_depth(o->method, R, sigma);
+      for (int j = 0; j < work->ny; ++j)
+        for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + e;
+    }
     frame_extract(&g->f, work, fs[k], r->out);
     st = emit(r, zs[k], -1, err);
     ps->slices++;
   }
+  lsm_grid_destroy(&slope);
   lsm_grid_destroy(&work);
   return st;
 }
@@ -329,6 +551,7 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
       float *o = &LSM_AT(mix, 0, j);
       for (int i = 0; i < mix->nx; ++i) o[i] = fminf(fmaxf(f[i], a[i]), fmaxf(rv[i], b[i]));
     }
+    gap_add_cubic(g, fs[k], mix);
     frame_extract(&g->f, mix, fs[k], r->out);
     solver += now_seconds() - t0;
     st = emit(r, zs[k], -1, err);
@@ -351,11 +574,12 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
 }
 
 /* Default mode, one gap: the output heights zs (fractions fs) strictly inside it. */
-static lsm_status run_gap_regular(stack_run *r, const slice *a, const slice *b, const double *zs,
+static lsm_status run_gap_regular(stack_run *r, const window *w, const double *zs,
                                   const double *fs, size_t n, lsm_pair_stats *ps, lsm_err *err) {
   if (n == 0) return LSM_OK;
+  const slice *a = w->s[1], *b = w->s[2];
   gap g;
-  LSM_TRY(gap_setup(r, a, b, &g, err));
+  LSM_TRY(gap_setup(r, w, &g, err));
   lsm_status st = LSM_OK;
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
   if (a->empty && b->empty) {
@@ -366,7 +590,7 @@ static lsm_status run_gap_regular(stack_run *r, const slice *a, const slice *b, 
       ps->slices++;
     }
   } else if (a->empty != b->empty) {
-    st = run_gap_cap(r, &g, a->empty, zs, fs, n, ps, err);
+    st = run_gap_cap(r, w, &g, a->empty, zs, fs, n, ps, err);
   } else if (r->opts->method == LSM_METHOD_BLEND) {
     lsm_grid *mix = NULL;
     st = lsm_grid_clone(g.phi_a, &mix, err);
@@ -375,6 +599,7 @@ static lsm_status run_gap_regular(stack_run *r, const slice *a, const slice *b, 
       for (int j = 0; j < mix->ny; ++j)
         for (int i = 0; i < mix->nx; ++i)
           LSM_AT(mix, i, j) = (1.0f - s) * LSM_AT(g.phi_a, i, j) + s * LSM_AT(g.phi_b, i, j);
+      gap_add_cubic(&g, fs[k], mix);
       frame_extract(&g.f, mix, fs[k], r->out);
       st = emit(r, zs[k], -1, err);
       ps->slices++;
@@ -389,10 +614,11 @@ static lsm_status run_gap_regular(stack_run *r, const slice *a, const slice *b, 
 
 /* Per-iteration mode, one gap: run to convergence once to count the
  * iterations k, then again emitting iterate n at height linspace(z_A, z_B, k+2)[n]. */
-static lsm_status run_gap_iterations(stack_run *r, const slice *a, const slice *b, double za,
-                                     double zb, lsm_pair_stats *ps, lsm_err *err) {
+static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_stats *ps,
+                                     lsm_err *err) {
+  const double za = w->z[1], zb = w->z[2];
   gap g;
-  LSM_TRY(gap_setup(r, a, b, &g, err));
+  LSM_TRY(gap_setup(r, w, &g, err));
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
   lsm_morph *m = NULL;
   const double t0 = now_seconds();
@@ -456,23 +682,29 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
                                   (float)opts->pixel_size, &r.image_phi, err);
   r.total = opts->per_iteration ? 0 : lsm_stack_output_count(src->z, src->count, dz);
 
-  slice a = {0}, b = {0};
+  /* The sliding window of input slices: prev, A, B, next (at most four held). */
+  slice prev = {0}, a = {0}, b = {0}, next = {0};
   const size_t K = r.total;
   const double z0 = src->z[0], eps = 1e-6 * dz;
   double *zs = NULL, *fs = NULL;
   size_t k = 0; /* next output index (default mode) */
+  const int cubic = opts->interp == LSM_INTERP_CUBIC && !opts->per_iteration;
   if (st == LSM_OK) st = slice_load(src, 0, width, height, opts->input, &a, err);
+  if (st == LSM_OK) st = slice_load(src, 1, width, height, opts->input, &b, err);
   if (st == LSM_OK && opts->per_iteration) st = emit_input(&r, &a, 0, src->z[0], err);
   for (size_t i = 0; st == LSM_OK && i + 1 < src->count; ++i) {
     lsm_pair_stats *ps = &stats[i];
     memset(ps, 0, sizeof *ps);
     ps->source = i;
     ps->target = i + 1;
-    st = slice_load(src, i + 1, width, height, opts->input, &b, err);
+    if (cubic && i + 2 < src->count) st = slice_load(src, i + 2, width, height, opts->input, &next, err);
     if (st != LSM_OK) break;
+    window w = {{i > 0 ? &prev : NULL, &a, &b, i + 2 < src->count ? &next : NULL},
+                {i > 0 ? src->z[i - 1] : 0.0, src->z[i], src->z[i + 1],
+                 i + 2 < src->count ? src->z[i + 2] : 0.0}};
     const double za = src->z[i], zb = src->z[i + 1];
     if (opts->per_iteration) {
-      st = run_gap_iterations(&r, &a, &b, za, zb, ps, err);
+      st = run_gap_iterations(&r, &w, ps, err);
       if (st == LSM_OK) st = emit_input(&r, &b, i + 1, zb, err);
     } else {
       /* Output heights in [za, zb): the one on za (if any) is slice i itself. */
@@ -497,11 +729,17 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
         fs[n] = (z - za) / (zb - za);
         ++n;
       }
-      if (st == LSM_OK) st = run_gap_regular(&r, &a, &b, zs, fs, n, ps, err);
+      if (st == LSM_OK) st = run_gap_regular(&r, &w, zs, fs, n, ps, err);
     }
-    slice_free(&a);
+    /* Slide: prev <- A <- B <- next; load B for the next gap if not cubic. */
+    slice_free(&prev);
+    prev = a;
     a = b;
-    memset(&b, 0, sizeof b);
+    b = next;
+    memset(&next, 0, sizeof next);
+    if (st == LSM_OK && !cubic && i + 2 < src->count)
+      st = slice_load(src, i + 2, width, height, opts->input, &b, err);
+    if (!cubic) slice_free(&prev); /* linear needs only A and B */
   }
   /* The last input slice, if it lies on the output grid. */
   if (st == LSM_OK && !opts->per_iteration && k < K &&
@@ -509,8 +747,10 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
     st = emit_input(&r, &a, src->count - 1, z0 + (double)k * dz, err);
   free(zs);
   free(fs);
+  slice_free(&prev);
   slice_free(&a);
   slice_free(&b);
+  slice_free(&next);
   lsm_grid_destroy(&r.image_phi);
   free(r.out);
   return st;

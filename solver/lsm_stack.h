@@ -14,7 +14,12 @@
  * the centroid of the convex hull of its foreground sits at the image centre,
  * on a canvas padded so nothing is clipped; an intermediate slice at fraction
  * s is shifted back by (1 - s) d_A + s d_B (bilinear resampling of phi), so
- * centroids travel on the straight segment between the two slices'.
+ * centroids travel on the straight segment between the two slices' (or on the
+ * monotone cubic through the neighbouring slices' centroids, --interp cubic).
+ * Auto alignment (the default) applies this to a pair only when shifting the
+ * source by the centroid difference makes it overlap the target more: a pair
+ * whose shape moved is aligned, a pair whose shape changed (a branch or an ear
+ * appearing moves the centroid without moving the object) is not.
  *
  * Empty slices: the object is absent there.  Next to a non-empty slice A the
  * object shrinks to nothing at mid-gap: the empty side gets the constant
@@ -50,6 +55,7 @@ typedef enum lsm_align {
   LSM_ALIGN_UNKNOWN = -1,
   LSM_ALIGN_HULL, /* convex-hull centroid to the image centre */
   LSM_ALIGN_NONE,
+  LSM_ALIGN_AUTO, /* hull for a pair only when the shift increases its overlap */
   LSM_ALIGN_COUNT
 } lsm_align;
 
@@ -60,10 +66,21 @@ lsm_input_kind lsm_input_from_name(const char *name);
 const char *lsm_align_name(lsm_align a);
 lsm_align lsm_align_from_name(const char *name);
 
+typedef enum lsm_interp {
+  LSM_INTERP_UNKNOWN = -1,
+  LSM_INTERP_LINEAR, /* each gap from its two slices only */
+  LSM_INTERP_CUBIC,  /* monotone cubic (PCHIP) through the four nearest slices */
+  LSM_INTERP_COUNT
+} lsm_interp;
+
+const char *lsm_interp_name(lsm_interp i);
+lsm_interp lsm_interp_from_name(const char *name);
+
 typedef struct lsm_stack_opts {
   lsm_method method;
   lsm_input_kind input;
   lsm_align align;
+  lsm_interp interp;   /* z-profile (default cubic) */
   double pixel_size;   /* physical size of a pixel (default 1) */
   double dz;           /* output slice spacing; <= 0 means pixel_size */
   int per_iteration;   /* the document's output mode */

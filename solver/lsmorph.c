@@ -169,6 +169,8 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   json_string(f, lsm_input_name(o->input));
   fputs(", \"align\": ", f);
   json_string(f, lsm_align_name(o->align));
+  fputs(", \"interp\": ", f);
+  json_string(f, lsm_interp_name(o->interp));
   fprintf(f, ", \"cfl\": %.10g, \"reinit_every\": %d, \"reinit_iters\": %d, \"tol\": %.10g, "
              "\"max_iter\": %d, \"per_iteration\": %s, \"pixel_size\": %.10g, \"dz\": %.10g, "
              "\"invert\": %s, \"threads\": %d},\n",
@@ -388,7 +390,8 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   LSM_TRY(lsm_dir_list_png(cli->truth_dir, &truth, &n, err));
   lsm_png_read_opts ro = {0, (uint64_t)1 << 28};
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
-  size_t count = 0, incomparable = 0;
+  size_t count = 0, incomparable = 0, pool_n = 0, pool_cap = 0;
+  double *pool = NULL;
   lsm_status st = LSM_OK;
   const size_t last_input = (n - 1) / (size_t)cli->stride * (size_t)cli->stride;
   for (size_t k = 0; st == LSM_OK && k <= last_input && k < n; ++k) {
@@ -399,7 +402,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     st = lsm_png_read_mask(path, &ro, &a, err);
     if (st == LSM_OK) st = lsm_png_read_mask(truth[k], &ro, &b, err);
     lsm_slice_score s;
-    if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, err);
+    if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, &pool, &pool_n, &pool_cap, err);
     if (st == LSM_OK) {
       dice += s.dice;
       vol_r += (double)s.area_result;
@@ -417,12 +420,15 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     lsm_mask_free(&b);
   }
   lsm_path_list_free(truth, n);
+  double pooled = lsm_quantile(pool, pool_n, 0.95);
+  free(pool);
   if (st != LSM_OK) return st;
   size_t cmp = count - incomparable;
   printf("{\"held_out\": %zu, \"dice_volume\": %.6f, \"dice\": %.6f, \"hd95\": %.4f, "
-         "\"mean_surface\": %.4f, \"volume_error\": %.6f, \"one_sided_empty\": %zu}\n",
+         "\"hd95_pooled\": %.4f, \"mean_surface\": %.4f, \"volume_error\": %.6f, "
+         "\"one_sided_empty\": %zu}\n",
          count, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0,
-         count ? dice / (double)count : NAN, cmp ? hd95 / (double)cmp : NAN,
+         count ? dice / (double)count : NAN, cmp ? hd95 / (double)cmp : NAN, pooled,
          cmp ? msd / (double)cmp : NAN, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN, incomparable);
   return LSM_OK;
 }

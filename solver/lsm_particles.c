@@ -1,0 +1,442 @@
+#include "lsm_particles.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "kernels/lsm_particle_cell.h"
+
+/* Per-particle state bits (the state array). */
+enum {
+  PCL_LEFT = 1u,    /* advection left the domain: removed by the next correction */
+  PCL_ESCAPED = 2u, /* escaped in the current correction */
+  PCL_DROP = 4u     /* attraction failed: removed by the seeding's compaction */
+};
+
+/* Random draws per particle (the 'draw' counter of lsm_pcl_uniform). */
+enum { DRAW_X = 0, DRAW_Y = 1, DRAW_GOAL = 2 };
+
+#define ATTRACT_ITERS 10
+#define MAX_HALVINGS 30
+
+struct lsm_particles {
+  lsm_pls_opts opts;
+  int nx, ny;
+  float dx, dy, inv_dx, inv_dy, inv_2dx, inv_2dy;
+  float vmin, vmax, rmin, rmax, band;
+  size_t n, cap;
+  float *x, *y, *x0, *y0, *radius;
+  int8_t *sign;
+  uint8_t *state;
+  /* correction scratch, nx*ny each: phi_plus, phi_minus, touched marks */
+  float *plus, *minus;
+  uint8_t *mark;
+  uint64_t gen; /* seeding generation (0 at creation) */
+  lsm_pls_stats stats;
+};
+
+void lsm_pls_opts_default(lsm_pls_opts *o) {
+  o->particles_per_cell = 16;
+  o->reseed_every = 0;
+  o->radius_adjust = 0;
+  o->seed = LSM_PLS_DEFAULT_SEED;
+  o->threads = 1;
+  o->skip_attraction = 0;
+}
+
+static int pls_threads(const lsm_particles *p, size_t n) {
+  return n < (size_t)LSM_PLS_MIN_PARALLEL || p->opts.threads < 1 ? 1 : p->opts.threads;
+}
+
+/* ---- interpolation ---------------------------------------------------------------- */
+
+/* phi at (x, y) and the unit normal there (interpolated central differences). */
+static float eval_phi_normal(const lsm_particles *p, const lsm_grid *g, float x, float y,
+                             float *n_x, float *n_y) {
+  float fx, fy;
+  int i = lsm_pcl_locate(x, p->nx, &fx), j = lsm_pcl_locate(y, p->ny, &fy);
+  int c[4] = {i > 0 ? i - 1 : 0, i, i + 1, i + 2 < p->nx ? i + 2 : p->nx - 1};
+  int r[4] = {j > 0 ? j - 1 : 0, j, j + 1, j + 2 < p->ny ? j + 2 : p->ny - 1};
+  float s[16];
+  for (int b = 0; b < 4; ++b) {
+    const float *row = &LSM_AT(g, 0, r[b]);
+    for (int a = 0; a < 4; ++a) s[b * 4 + a] = row[c[a]];
+  }
+  float wx0 = c[2] - c[0] == 2 ? p->inv_2dx : p->inv_dx;
+  float wx1 = c[3] - c[1] == 2 ? p->inv_2dx : p->inv_dx;
+  float wy0 = r[2] - r[0] == 2 ? p->inv_2dy : p->inv_dy;
+  float wy1 = r[3] - r[1] == 2 ? p->inv_2dy : p->inv_dy;
+  return lsm_pcl_phi_normal(s, fx, fy, wx0, wx1, wy0, wy1, n_x, n_y);
+}
+
+/* Bilinear value of g at (x, y). */
+static float eval_phi(const lsm_particles *p, const lsm_grid *g, float x, float y) {
+  float fx, fy;
+  int i = lsm_pcl_locate(x, p->nx, &fx), j = lsm_pcl_locate(y, p->ny, &fy);
+  return lsm_pcl_bilinear(LSM_AT(g, i, j), LSM_AT(g, i + 1, j), LSM_AT(g, i, j + 1),
+                          LSM_AT(g, i + 1, j + 1), fx, fy);
+}
+
+static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
+
+/* ---- storage ------------------------------------------------------------------------ */
+
+static lsm_status reserve(lsm_particles *p, size_t need, lsm_err *err) {
+  if (need <= p->cap) return LSM_OK;
+  size_t cap = p->cap + p->cap / 2;
+  if (cap < need) cap = need;
+  size_t fbytes, bbytes;
+  if (!lsm_size_mul(cap, sizeof(float), &fbytes) || !lsm_size_mul(cap, 1, &bbytes))
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "particles: %zu particles overflow", need);
+  float **fa[5] = {&p->x, &p->y, &p->x0, &p->y0, &p->radius};
+  for (int k = 0; k < 5; ++k) {
+    float *q = realloc(*fa[k], fbytes);
+    if (!q) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot allocate %zu particles", cap);
+    *fa[k] = q;
+  }
+  int8_t *s = realloc(p->sign, bbytes);
+  if (!s) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot allocate %zu particles", cap);
+  p->sign = s;
+  uint8_t *st = realloc(p->state, bbytes);
+  if (!st) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot allocate %zu particles", cap);
+  p->state = st;
+  p->cap = cap;
+  return LSM_OK;
+}
+
+/* Removes every particle with any of the given state bits, keeping the order;
+ * returns the number removed. */
+static size_t compact(lsm_particles *p, unsigned bits) {
+  size_t w = 0;
+  for (size_t k = 0; k < p->n; ++k) {
+    if (p->state[k] & bits) continue;
+    if (w != k) {
+      p->x[w] = p->x[k];
+      p->y[w] = p->y[k];
+      p->x0[w] = p->x0[k];
+      p->y0[w] = p->y0[k];
+      p->radius[w] = p->radius[k];
+      p->sign[w] = p->sign[k];
+      p->state[w] = p->state[k];
+    }
+    ++w;
+  }
+  size_t removed = p->n - w;
+  p->n = w;
+  return removed;
+}
+
+/* ---- seeding (Algorithm 3.2) -------------------------------------------------------- */
+
+static int is_band_cell(const lsm_particles *p, const lsm_grid *phi, int i, int j) {
+  return lsm_pcl_band_cell(LSM_AT(phi, i, j), LSM_AT(phi, i + 1, j), LSM_AT(phi, i, j + 1),
+                           LSM_AT(phi, i + 1, j + 1), p->band);
+}
+
+/* Attracts particle k to its band on phi; returns 1 on success (position and
+ * radius stored), 0 when it should be discarded. */
+static int attract(const lsm_particles *p, const lsm_grid *phi, size_t k, float goal) {
+  const int s = p->sign[k];
+  float px = p->x[k], py = p->y[k], n_x, n_y;
+  float ph = eval_phi_normal(p, phi, px, py, &n_x, &n_y);
+  for (int it = 0; it < ATTRACT_ITERS; ++it) {
+    float step = goal - ph, lambda = 1.0f, qx = px, qy = py;
+    for (int h = 0; h <= MAX_HALVINGS; ++h, lambda *= 0.5f) {
+      qx = px + lambda * step * n_x * p->inv_dx;
+      qy = py + lambda * step * n_y * p->inv_dy;
+      if (lsm_pcl_in_domain(qx, qy, p->nx, p->ny)) break;
+    }
+    px = clampf(qx, 0.0f, (float)(p->nx - 1));
+    py = clampf(qy, 0.0f, (float)(p->ny - 1));
+    ph = eval_phi_normal(p, phi, px, py, &n_x, &n_y);
+    if (lsm_pcl_in_band(s, ph, p->vmin, p->vmax)) {
+      p->x[k] = p->x0[k] = px;
+      p->y[k] = p->y0[k] = py;
+      p->radius[k] = lsm_pcl_radius(s, ph, p->rmin, p->rmax);
+      return 1;
+    }
+  }
+  return 0;
+}
+
+/* Seeds the band of phi into an empty set (generation p->gen). */
+static lsm_status seed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
+  p->n = 0;
+  p->stats.band_cells = 0;
+  if (p->nx < 2 || p->ny < 2) return LSM_OK;
+  size_t cells = 0;
+  for (int j = 0; j < p->ny - 1; ++j)
+    for (int i = 0; i < p->nx - 1; ++i) cells += (size_t)is_band_cell(p, phi, i, j);
+  const int ppc = p->opts.particles_per_cell, npos = ppc - ppc / 2;
+  size_t total;
+  if (!lsm_size_mul(cells, (size_t)ppc, &total) || total > (size_t)PTRDIFF_MAX / 8)
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "particles: %zu band cells x %d particles overflow",
+                    cells, ppc);
+  LSM_TRY(reserve(p, total, err));
+  const uint64_t seedv = p->opts.seed, gen = p->gen;
+  size_t k = 0;
+  for (int j = 0; j < p->ny - 1; ++j)
+    for (int i = 0; i < p->nx - 1; ++i) {
+      if (!is_band_cell(p, phi, i, j)) continue;
+      const uint64_t cell = (uint64_t)j * (uint64_t)p->nx + (uint64_t)i;
+      for (int q = 0; q < ppc; ++q, ++k) {
+        p->x[k] = p->x0[k] =
+            lsm_pcl_seed_coord(i, lsm_pcl_uniform(seedv, gen, cell, (uint64_t)q, DRAW_X));
+        p->y[k] = p->y0[k] =
+            lsm_pcl_seed_coord(j, lsm_pcl_uniform(seedv, gen, cell, (uint64_t)q, DRAW_Y));
+        p->sign[k] = q < npos ? 1 : -1;
+        /* the radius slot holds phi_goal until attraction sets the radius */
+        p->radius[k] = (float)p->sign[k] *
+                       (p->vmin + lsm_pcl_uniform(seedv, gen, cell, (uint64_t)q, DRAW_GOAL) *
+                                      (p->vmax - p->vmin));
+        p->state[k] = 0;
+      }
+    }
+  p->n = total;
+  p->stats.band_cells = (long long)cells;
+  p->stats.seeded += (long long)total;
+
+  if (p->opts.skip_attraction) {
+    /* seeding only: radius from phi at the seeded position */
+    for (size_t q = 0; q < total; ++q)
+      p->radius[q] = lsm_pcl_radius(p->sign[q], eval_phi(p, phi, p->x[q], p->y[q]), p->rmin,
+                                    p->rmax);
+    return LSM_OK;
+  }
+  /* Attraction, per particle. */
+  const ptrdiff_t n = (ptrdiff_t)total;
+#pragma omp parallel for num_threads(pls_threads(p, total)) schedule(dynamic, 1024)
+  for (ptrdiff_t q = 0; q < n; ++q)
+    p->state[q] = attract(p, phi, (size_t)q, p->radius[q]) ? 0 : PCL_DROP;
+  p->stats.discarded += (long long)compact(p, PCL_DROP);
+  return LSM_OK;
+}
+
+/* ---- public API --------------------------------------------------------------------- */
+
+void lsm_pls_destroy(lsm_particles **pp) {
+  if (!pp || !*pp) return;
+  lsm_particles *p = *pp;
+  free(p->x);
+  free(p->y);
+  free(p->x0);
+  free(p->y0);
+  free(p->radius);
+  free(p->sign);
+  free(p->state);
+  free(p->plus);
+  free(p->minus);
+  free(p->mark);
+  free(p);
+  *pp = NULL;
+}
+
+lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_particles **out,
+                          lsm_err *err) {
+  *out = NULL;
+  lsm_pls_opts opts;
+  if (o)
+    opts = *o;
+  else
+    lsm_pls_opts_default(&opts);
+  if (opts.particles_per_cell < 1 || opts.particles_per_cell > 1024)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "particles per cell %d must be in 1..1024",
+                    opts.particles_per_cell);
+  if (opts.reseed_every < 0)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "reseeding interval %d must be >= 0",
+                    opts.reseed_every);
+  if (opts.threads < 1) opts.threads = 1;
+  lsm_particles *p = calloc(1, sizeof *p);
+  if (!p) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a particle set");
+  p->opts = opts;
+  p->nx = phi0->nx;
+  p->ny = phi0->ny;
+  p->dx = phi0->dx;
+  p->dy = phi0->dy;
+  p->inv_dx = 1.0f / p->dx;
+  p->inv_dy = 1.0f / p->dy;
+  p->inv_2dx = 0.5f / p->dx;
+  p->inv_2dy = 0.5f / p->dy;
+  const float hmin = fminf(p->dx, p->dy), hmax = fmaxf(p->dx, p->dy);
+  p->vmin = 0.1f * hmin;
+  p->vmax = 3.0f * hmax;
+  p->rmin = 0.1f * hmin;
+  p->rmax = 0.5f * hmin;
+  p->band = 3.0f * hmax;
+  size_t cells;
+  if (!lsm_size_mul((size_t)p->nx, (size_t)p->ny, &cells)) {
+    lsm_pls_destroy(&p);
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "particles: grid %dx%d overflows", phi0->nx, phi0->ny);
+  }
+  p->plus = lsm_alloc(cells, sizeof(float), err, "particle correction");
+  p->minus = p->plus ? lsm_alloc(cells, sizeof(float), err, "particle correction") : NULL;
+  p->mark = p->minus ? calloc(cells, 1) : NULL;
+  if (!p->mark) {
+    lsm_pls_destroy(&p);
+    return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot allocate correction scratch");
+  }
+  lsm_status st = seed(p, phi0, err);
+  if (st != LSM_OK) {
+    lsm_pls_destroy(&p);
+    return st;
+  }
+  *out = p;
+  return LSM_OK;
+}
+
+void lsm_pls_begin_step(lsm_particles *p) {
+  if (p->n == 0) return;
+  memcpy(p->x0, p->x, p->n * sizeof(float));
+  memcpy(p->y0, p->y, p->n * sizeof(float));
+}
+
+void lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_target, float c0,
+                   float c1, float dt) {
+  const ptrdiff_t n = (ptrdiff_t)p->n;
+  const float hx = (float)(p->nx - 1), hy = (float)(p->ny - 1);
+#pragma omp parallel for num_threads(pls_threads(p, p->n)) schedule(static)
+  for (ptrdiff_t k = 0; k < n; ++k) {
+    float x = p->x[k], y = p->y[k], n_x, n_y;
+    float F = eval_phi_normal(p, in, x, y, &n_x, &n_y) - eval_phi(p, phi_target, x, y);
+    float xn = c0 * p->x0[k] + c1 * (x + dt * F * n_x * p->inv_dx);
+    float yn = c0 * p->y0[k] + c1 * (y + dt * F * n_y * p->inv_dy);
+    if (!lsm_pcl_in_domain(xn, yn, p->nx, p->ny)) {
+      p->state[k] |= PCL_LEFT;
+      /* clamped so that later stages interpolate inside the grid; a NaN
+       * position (never expected) is also out of the domain and parked at 0 */
+      xn = xn == xn ? clampf(xn, 0.0f, hx) : 0.0f;
+      yn = yn == yn ? clampf(yn, 0.0f, hy) : 0.0f;
+    }
+    p->x[k] = xn;
+    p->y[k] = yn;
+  }
+}
+
+void lsm_pls_stage_hook(void *ctx, const lsm_grid *in, const lsm_grid *phi_target, float c0,
+                        float c1, float dt) {
+  lsm_pls_stage((lsm_particles *)ctx, in, phi_target, c0, c1, dt);
+}
+
+lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
+  p->stats.left_domain += (long long)compact(p, PCL_LEFT);
+  const ptrdiff_t n = (ptrdiff_t)p->n;
+  const int nt = pls_threads(p, p->n);
+
+  /* 1. detection (parallel, each particle writes its own flag) */
+#pragma omp parallel for num_threads(nt) schedule(static)
+  for (ptrdiff_t k = 0; k < n; ++k) {
+    float ph = eval_phi(p, phi, p->x[k], p->y[k]);
+    p->state[k] = lsm_pcl_escaped(p->sign[k], ph, p->radius[k]) ? PCL_ESCAPED : 0;
+  }
+
+  /* 2. phi_plus / phi_minus at the corners of escaped particles (serial, in
+   *    particle order; max/min make the order irrelevant anyway).  phi itself
+   *    is not written until every particle has been seen. */
+  long long escaped = 0, corrected = 0;
+  const int nx = p->nx;
+  for (ptrdiff_t k = 0; k < n; ++k) {
+    if (!(p->state[k] & PCL_ESCAPED)) continue;
+    ++escaped;
+    const int s = p->sign[k];
+    const float r = p->radius[k], x = p->x[k], y = p->y[k];
+    float fx, fy;
+    const int i = lsm_pcl_locate(x, p->nx, &fx), j = lsm_pcl_locate(y, p->ny, &fy);
+    for (int b = 0; b < 2; ++b)
+      for (int a = 0; a < 2; ++a) {
+        const size_t idx = (size_t)(j + b) * (size_t)nx + (size_t)(i + a);
+        const float pv = LSM_AT(phi, i + a, j + b);
+        if (!p->mark[idx]) {
+          p->mark[idx] = 1;
+          p->plus[idx] = p->minus[idx] = pv;
+        }
+        const float d = lsm_pcl_distance((float)(i + a) - x, (float)(j + b) - y, p->dx, p->dy);
+        const float v = lsm_pcl_corner_value(s, r, pv, d);
+        if (s > 0)
+          p->plus[idx] = lsm_pcl_merge(s, p->plus[idx], v);
+        else
+          p->minus[idx] = lsm_pcl_merge(s, p->minus[idx], v);
+      }
+  }
+
+  /* 3. Eq. 3.26 at every touched corner (each once: its mark is cleared). */
+  if (escaped) {
+    for (ptrdiff_t k = 0; k < n; ++k) {
+      if (!(p->state[k] & PCL_ESCAPED)) continue;
+      float fx, fy;
+      const int i = lsm_pcl_locate(p->x[k], p->nx, &fx), j = lsm_pcl_locate(p->y[k], p->ny, &fy);
+      for (int b = 0; b < 2; ++b)
+        for (int a = 0; a < 2; ++a) {
+          const size_t idx = (size_t)(j + b) * (size_t)nx + (size_t)(i + a);
+          if (!p->mark[idx]) continue;
+          p->mark[idx] = 0;
+          const float v = lsm_pcl_select(p->plus[idx], p->minus[idx]);
+          float *cell = &LSM_AT(phi, i + a, j + b);
+          if (v != *cell) {
+            *cell = v;
+            ++corrected;
+          }
+        }
+    }
+  }
+  for (ptrdiff_t k = 0; k < n; ++k) p->state[k] = 0;
+  p->stats.escaped_last = escaped;
+  p->stats.corrected_last = corrected;
+  p->stats.escaped_total += escaped;
+  p->stats.corrected_total += corrected;
+
+  /* 4. radius adjustment on the corrected phi (option) */
+  if (p->opts.radius_adjust) {
+#pragma omp parallel for num_threads(nt) schedule(static)
+    for (ptrdiff_t k = 0; k < n; ++k) {
+      const int s = p->sign[k];
+      const float ph = eval_phi(p, phi, p->x[k], p->y[k]);
+      if ((s > 0 && ph > 0.0f) || (s < 0 && ph < 0.0f))
+        p->radius[k] = lsm_pcl_radius(s, ph, p->rmin, p->rmax);
+    }
+  }
+
+  p->stats.steps++;
+  lsm_status st = LSM_OK;
+  /* 5. reseeding (option) */
+  if (p->opts.reseed_every > 0 && p->stats.steps % p->opts.reseed_every == 0) {
+    p->stats.reseed_dropped += (long long)p->n;
+    p->n = 0;
+    p->gen++;
+    p->stats.reseeds++;
+    st = seed(p, phi, err);
+  }
+  lsm_grid_fill_ghosts(phi);
+  return st;
+}
+
+const lsm_pls_stats *lsm_pls_stats_get(const lsm_particles *p) { return &p->stats; }
+
+size_t lsm_pls_count(const lsm_particles *p) { return p->n; }
+
+lsm_pls_view lsm_pls_view_get(const lsm_particles *p) {
+  lsm_pls_view v = {p->n, p->x, p->y, p->radius, p->sign};
+  return v;
+}
+
+lsm_status lsm_pls_set(lsm_particles *p, size_t n, const float *x, const float *y,
+                       const int8_t *sign, const float *radius, lsm_err *err) {
+  if (n > 0 && (p->nx < 2 || p->ny < 2))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "particles: a %dx%d grid has no cells", p->nx, p->ny);
+  for (size_t k = 0; k < n; ++k) {
+    if (sign[k] != 1 && sign[k] != -1)
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "particle %zu: sign %d is not +-1", k, sign[k]);
+    if (!isfinite(x[k]) || !isfinite(y[k]) || !isfinite(radius[k]))
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "particle %zu: value not finite", k);
+  }
+  LSM_TRY(reserve(p, n, err));
+  const float hx = (float)(p->nx - 1), hy = (float)(p->ny - 1);
+  for (size_t k = 0; k < n; ++k) {
+    p->x[k] = p->x0[k] = clampf(x[k], 0.0f, hx);
+    p->y[k] = p->y0[k] = clampf(y[k], 0.0f, hy);
+    p->sign[k] = sign[k];
+    p->radius[k] = radius[k];
+    p->state[k] = 0;
+  }
+  p->n = n;
+  return LSM_OK;
+}
