@@ -551,6 +551,23 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
       float *o = &LSM_AT(mix, 0, j);
       for (int i = 0; i < mix->nx; ++i) o[i] = fminf(fmaxf(f[i], a[i]), fmaxf(rv[i], b[i]));
     }
+    if (g->slope_a) {
+      /* Cubic profile: the spline, plus the morph's departure from the linear
+       * blend weighted by omega(s) = 16 s^2 (1 - s)^2.  The discrete morph's
+       * error relative to the distance still to go grows like t e^-t, so read
+       * at t(s) = -ln(1 - s) its slope has a logarithmic singularity at the
+       * slices; omega vanishes with zero slope there, which keeps the profile
+       * C1 across slices, and is 1 at mid-gap where the morph matters. */
+      const float s = (float)fs[k], omega = 16.0f * s * s * (1.0f - s) * (1.0f - s);
+      for (int j = 0; j < mix->ny; ++j) {
+        const float *a = &LSM_AT(pa, 0, j), *b = &LSM_AT(pb, 0, j);
+        float *o = &LSM_AT(mix, 0, j);
+        for (int i = 0; i < mix->nx; ++i) {
+          const float lin = (1.0f - s) * a[i] + s * b[i];
+          o[i] = lin + omega * (o[i] - lin);
+        }
+      }
+    }
     gap_add_cubic(g, fs[k], mix);
     frame_extract(&g->f, mix, fs[k], r->out);
     solver += now_seconds() - t0;

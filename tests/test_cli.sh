@@ -1,0 +1,219 @@
+#!/bin/sh
+# End-to-end tests of the lsmorph command line.
+#   sh tests/test_cli.sh BUILD_DIR
+# Generates synthetic slices with BUILD_DIR/examples/gen_synthetic, runs
+# BUILD_DIR/lsmorph on them and checks exit codes, messages and the files
+# written.  Prints one line per failed check and "cli: N passed, N failed".
+set -u
+BUILD=${1:-build}
+LSM="$BUILD/lsmorph"
+GEN="$BUILD/examples/gen_synthetic"
+pass=0
+fail=0
+
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "cli: FAIL: $*"; }
+check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
+  desc=$1
+  shift
+  if "$@"; then ok; else bad "$desc"; fi
+}
+finish() {
+  echo "cli: $pass passed, $fail failed"
+  [ "$fail" -eq 0 ]
+  exit
+}
+
+for f in "$LSM" "$GEN"; do
+  [ -x "$f" ] || { bad "$f is missing (run make first)"; finish; }
+done
+
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-cli.XXXXXX") || exit 1
+trap 'rm -rf "$TMP"' EXIT
+trap 'exit 1' INT TERM
+
+# file_size FILE: bytes.
+file_size() { wc -c <"$1" | tr -d ' '; }
+# lines FILE: number of lines.
+lines() { wc -l <"$1" | tr -d ' '; }
+# json_count FILE KEY: number of occurrences of "KEY": in FILE.
+json_count() { grep -o "\"$2\":" "$1" | wc -l | tr -d ' '; }
+# png_u32 FILE OFFSET: big-endian 32-bit number (IHDR width at 16, height at 20).
+png_u32() { od -An -tu1 -j "$2" -N4 "$1" | awk '{ print (($1 * 256 + $2) * 256 + $3) * 256 + $4 }'; }
+
+# ---- help and version ---------------------------------------------------------------
+out=$("$LSM" --help 2>&1)
+check "--help exits 0" [ $? -eq 0 ]
+case $out in *reconstruct*) ok ;; *) bad "--help does not mention reconstruct" ;; esac
+out=$("$LSM" help reconstruct 2>&1)
+check "help reconstruct exits 0" [ $? -eq 0 ]
+case $out in *--heights*) ok ;; *) bad "help reconstruct does not list --heights" ;; esac
+out=$("$LSM" --version 2>&1)
+check "--version exits 0" [ $? -eq 0 ]
+case $out in "lsmorph "[0-9]*.[0-9]*) ok ;; *) bad "--version printed '$out'" ;; esac
+
+# ---- usage errors: exit 2 and "lsmorph: error:" -------------------------------------
+"$LSM" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "no command exits 2 (got $rc)" [ $rc -eq 2 ]
+"$LSM" reconstruct >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "reconstruct without arguments exits 2 (got $rc)" [ $rc -eq 2 ]
+check "reconstruct without arguments says 'lsmorph: error:'" grep -q "lsmorph: error:" "$TMP/e"
+"$LSM" reconstruct "$TMP" -o "$TMP/x" --no-such-option >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "unknown option exits 2 (got $rc)" [ $rc -eq 2 ]
+check "unknown option says 'lsmorph: error:'" grep -q "lsmorph: error:" "$TMP/e"
+check "unknown option is named in the message" grep -q -e "--no-such-option" "$TMP/e"
+"$LSM" reconstruct "$TMP" -o "$TMP/x" --method nope >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "bad --method value exits 2 (got $rc)" [ $rc -eq 2 ]
+"$LSM" reconstruct "$TMP" -o "$TMP/x" --cfl -1 >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "negative --cfl exits 2 (got $rc)" [ $rc -eq 2 ]
+"$LSM" frobnicate >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "unknown command exits 2 (got $rc)" [ $rc -eq 2 ]
+check "usage errors created nothing" [ ! -e "$TMP/x" ]
+
+# ---- synthetic slices -------------------------------------------------------------------
+if ! "$GEN" pyramid "$TMP/syn" >"$TMP/o" 2>"$TMP/e"; then
+  bad "gen_synthetic pyramid failed: $(cat "$TMP/e")"
+  finish
+fi
+SET="$TMP/syn/pyramid"
+N_IN=$(ls "$SET" | grep -c '\.png$')
+check "gen_synthetic wrote 7 pyramid slices (got $N_IN)" [ "$N_IN" -eq 7 ]
+check "heights.txt has 7 lines" [ "$(lines "$SET/heights.txt")" -eq 7 ]
+W=$(png_u32 "$SET/001.png" 16)
+H=$(png_u32 "$SET/001.png" 20)
+check "pyramid slices are 100x70 (got ${W}x${H})" [ "${W}x${H}" = "100x70" ]
+
+# ---- reconstruct the pyramid -------------------------------------------------------------
+OUT="$TMP/out"
+"$LSM" reconstruct "$SET" -o "$OUT" --input outline --heights "$SET/heights.txt" --dz 10 -q \
+  >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "reconstruct pyramid exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "-q prints nothing on stderr" [ ! -s "$TMP/e" ]
+check "volume.nrrd exists" [ -f "$OUT/volume.nrrd" ]
+check "heights.txt exists" [ -f "$OUT/heights.txt" ]
+check "run.json exists" [ -f "$OUT/run.json" ]
+if [ -f "$OUT/heights.txt" ] && [ -f "$OUT/volume.nrrd" ]; then
+  N=$(lines "$OUT/heights.txt")
+  # Input heights 0, 40, ..., 240 with --dz 10: z = 0, 10, ..., 240, 25 slices.
+  check "heights.txt has 25 lines (got $N)" [ "$N" -eq 25 ]
+  want=$((512 + W * H * N * 4))
+  got=$(file_size "$OUT/volume.nrrd")
+  check "volume.nrrd is 512 + W*H*N*4 = $want bytes (got $got)" [ "$got" -eq "$want" ]
+  head -c 512 "$OUT/volume.nrrd" >"$TMP/hdr"
+  check "volume.nrrd header: sizes $W $H $N" grep -a -q "^sizes: $W $H $N\$" "$TMP/hdr"
+  check "volume.nrrd header: type float" grep -a -q "^type: float" "$TMP/hdr"
+  check "volume.nrrd header: encoding raw" grep -a -q "^encoding: raw" "$TMP/hdr"
+  check "heights are 0, 10, ..., 240" \
+    awk -v n="$N" '{ if ($1 + 0 != (NR - 1) * 10) b = 1 } END { exit (b || NR != n) }' "$OUT/heights.txt"
+  NS=$(ls "$OUT/slices" 2>/dev/null | grep -c '\.png$')
+  check "slices/ has $N PNGs (got $NS)" [ "$NS" -eq "$N" ]
+  check "slices/00001.png is a PNG" grep -q "PNG" "$OUT/slices/00001.png"
+fi
+J="$OUT/run.json"
+if [ -f "$J" ]; then
+  # 7 inputs -> 6 pairs, each an object with these fields (counted inside
+  # the "pairs" list only: "totals" has "iterations" and "seconds" too).
+  awk '/"pairs": *\[/ { on = 1 } on { print } on && /\]/ { exit }' "$J" >"$TMP/pairs"
+  for key in source target iterations dt cp seconds cells; do
+    c=$(json_count "$TMP/pairs" "$key")
+    check "run.json has 6 \"$key\" entries (got $c)" [ "$c" -eq 6 ]
+  done
+  check "run.json has a \"pairs\" list" grep -q '"pairs": *\[' "$J"
+  check "run.json totals say 6 pairs" grep -q '"totals": {"pairs": 6' "$J"
+  check "run.json lists the 7 input files in order" \
+    grep -q '"files": \["001.png", "002.png", "003.png", "004.png", "005.png", "006.png", "007.png"\]' "$J"
+  check "run.json has the pair 006.png -> 007.png" \
+    grep -q '"source": "006.png", "target": "007.png"' "$J"
+  check "run.json: no pair hit max_iter" sh -c "! grep -q '\"hit_max_iter\": true' '$J'"
+  if command -v python3 >/dev/null 2>&1; then
+    check "run.json is valid JSON: 6 pairs, positive iterations, dt, cells; 25 slices" python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+p = d["pairs"]
+assert len(p) == 6, len(p)
+for q in p:
+    assert q["iterations"] > 0 and q["dt"] > 0 and q["cells"] > 0 and q["seconds"] >= 0, q
+assert d["output"]["slices"] == 25, d["output"]
+' "$J"
+  fi
+fi
+check "no temporary folder left next to OUT" sh -c "! ls -d '$OUT'.tmp-* >/dev/null 2>&1"
+
+# The same command into an existing OUT replaces it.
+"$LSM" reconstruct "$SET" -o "$OUT" --input outline --heights "$SET/heights.txt" --dz 40 -q \
+  >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "re-running into an existing OUT exits 0 (got $rc)" [ $rc -eq 0 ]
+N2=$(lines "$OUT/heights.txt")
+check "re-run replaced OUT (7 slices with --dz 40, got $N2)" [ "$N2" -eq 7 ]
+NS2=$(ls "$OUT/slices" | grep -c '\.png$')
+check "re-run left no stale slices (got $NS2)" [ "$NS2" -eq 7 ]
+
+# ---- failures: exit 1, nothing created --------------------------------------------------
+"$LSM" reconstruct "$TMP/does-not-exist" -o "$TMP/out-missing" -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "missing folder exits 1 (got $rc)" [ $rc -eq 1 ]
+check "missing folder says 'lsmorph: error:'" grep -q "lsmorph: error:" "$TMP/e"
+check "missing folder leaves no OUT" [ ! -e "$TMP/out-missing" ]
+check "missing folder leaves no temporary folder" sh -c "! ls -d '$TMP'/out-missing.tmp-* >/dev/null 2>&1"
+
+printf '0\n10\n' >"$TMP/h2.txt"
+"$LSM" reconstruct "$SET" -o "$TMP/out-h" --input outline --heights "$TMP/h2.txt" -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "2 heights for 7 slices exits 1 (got $rc)" [ $rc -eq 1 ]
+check "2 heights for 7 slices leaves no OUT" [ ! -e "$TMP/out-h" ]
+
+mkdir "$TMP/one" && cp "$SET/001.png" "$TMP/one/"
+"$LSM" reconstruct "$TMP/one" -o "$TMP/out-one" -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "a single slice exits 1 (got $rc)" [ $rc -eq 1 ]
+check "a single slice leaves no OUT" [ ! -e "$TMP/out-one" ]
+
+# ---- natural sort end to end -------------------------------------------------------------
+# 1.png, 2.png, 10.png: natural order 1, 2, 10 (byte order would be 1, 10, 2).
+NAT="$TMP/nat"
+mkdir "$NAT"
+cp "$SET/001.png" "$NAT/1.png"
+cp "$SET/002.png" "$NAT/2.png"
+cp "$SET/003.png" "$NAT/10.png"
+"$LSM" reconstruct "$NAT" -o "$TMP/out-nat" --input outline --spacing 4 --method blend -q \
+  >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "natural-sort run exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+if [ -f "$TMP/out-nat/run.json" ]; then
+  check "run.json files in natural order 1, 2, 10" \
+    grep -q '"files": \["1.png", "2.png", "10.png"\]' "$TMP/out-nat/run.json"
+  check "run.json pair 1.png -> 2.png" \
+    grep -q '"source": "1.png", "target": "2.png"' "$TMP/out-nat/run.json"
+  check "run.json pair 2.png -> 10.png" \
+    grep -q '"source": "2.png", "target": "10.png"' "$TMP/out-nat/run.json"
+  # Heights 0, 4, 8 with dz 1: 9 slices.
+  check "natural-sort run wrote 9 slices" [ "$(lines "$TMP/out-nat/heights.txt")" -eq 9 ]
+fi
+# The rectangles shrink in natural order (1.png: 86x56, 2.png: 64x42, 10.png:
+# 48x30); byte order (1, 10, 2) would not.  With dz 1 the output slices at
+# z = 0, 4, 8 are those inputs exactly: count their inside cells (phi <= 0)
+# in volume.nrrd (little-endian float32 after the 512-byte header).
+inside() { # inside NRRD K: cells with phi <= 0 in slice K (0-based)
+  od -An -v -tf4 -j $((512 + $2 * W * H * 4)) -N $((W * H * 4)) "$1" |
+    awk '{ for (i = 1; i <= NF; i++) if ($i + 0 <= 0) n++ } END { print n + 0 }'
+}
+V="$TMP/out-nat/volume.nrrd"
+if [ -f "$V" ]; then
+  a0=$(inside "$V" 0)
+  a4=$(inside "$V" 4)
+  a8=$(inside "$V" 8)
+  check "natural order: inside areas decrease over z = 0, 4, 8 (got $a0, $a4, $a8)" \
+    awk -v a="$a0" -v b="$a4" -v c="$a8" 'BEGIN { exit !(a > b && b > c && c > 0) }'
+else
+  bad "natural-sort run wrote no volume.nrrd"
+fi
+
+finish

@@ -1,0 +1,905 @@
+/* Numerical tests of the morph solver: per-cell Hamiltonians (upwind,
+ * Roe-Fix branches), CFL step, one grid stage, the integrators, the concentric
+ * circle morph against its analytic solution (with a convergence check),
+ * reinitialisation, and the fraction -> time map.
+ *
+ * Reference facts (METHOD.md §2–3):
+ *   phi_t + F |grad phi| = 0,  F = phi - phi_target.
+ *   For concentric circles phi_0 = |x| - r1, phi_T = |x| - r2, F = r2 - r1 is
+ *   constant in space, phi stays a signed distance function, and the front is
+ *   exactly r(t) = r2 + (r1 - r2) e^{-t}. */
+#include "tests/lsm_test.h"
+
+#include "kernels/lsm_cell.h"
+#include "solver/lsm_grid.h"
+#include "solver/lsm_morph.h"
+#include "solver/lsm_reinit.h"
+#include "solver/lsm_scheme.h"
+#include "solver/lsm_status.h"
+
+/* ------------------------------------------------------------------------ */
+/* helpers                                                                   */
+
+static lsm_grid *new_grid(int nx, int ny, float dx, float dy) {
+  lsm_grid *g = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_grid_create(nx, ny, dx, dy, &g, &err), LSM_OK);
+  assert_non_null(g);
+  return g;
+}
+
+/* Physical coordinates of cell centres, the grid centred on the origin. */
+static double cx_of(const lsm_grid *g, int i) { return (i + 0.5) * g->dx - 0.5 * g->nx * g->dx; }
+static double cy_of(const lsm_grid *g, int j) { return (j + 0.5) * g->dy - 0.5 * g->ny * g->dy; }
+
+/* phi = scale * (|x - c| - r), analytic (not through the EDT). */
+static void fill_circle(lsm_grid *g, double x0, double y0, double r, double scale) {
+  for (int j = 0; j < g->ny; ++j)
+    for (int i = 0; i < g->nx; ++i)
+      LSM_AT(g, i, j) = (float)(scale * (hypot(cx_of(g, i) - x0, cy_of(g, j) - y0) - r));
+  lsm_grid_fill_ghosts(g);
+}
+
+/* phi = a x + b y + off. */
+static void fill_linear(lsm_grid *g, double a, double b, double off) {
+  for (int j = 0; j < g->ny; ++j)
+    for (int i = 0; i < g->nx; ++i)
+      LSM_AT(g, i, j) = (float)(a * cx_of(g, i) + b * cy_of(g, j) + off);
+  lsm_grid_fill_ghosts(g);
+}
+
+/* Zero crossings of phi along every grid row and column, located by linear
+ * interpolation between the two cells that straddle it.  Returns the mean
+ * distance of the crossings from (x0, y0) and, in *maxdev, the largest
+ * |distance - r_ref|; *count gets the number of crossings. */
+static double front_radius(const lsm_grid *g, double x0, double y0, double r_ref, double *maxdev,
+                           int *count) {
+  double sum = 0.0, dev = 0.0;
+  int n = 0;
+  for (int j = 0; j < g->ny; ++j)
+    for (int i = 0; i + 1 < g->nx; ++i) {
+      const double a = LSM_AT(g, i, j), b = LSM_AT(g, i + 1, j);
+      if ((a <= 0.0) == (b <= 0.0)) continue;
+      const double x = cx_of(g, i) + g->dx * a / (a - b), y = cy_of(g, j);
+      const double r = hypot(x - x0, y - y0);
+      sum += r;
+      dev = fmax(dev, fabs(r - r_ref));
+      ++n;
+    }
+  for (int i = 0; i < g->nx; ++i)
+    for (int j = 0; j + 1 < g->ny; ++j) {
+      const double a = LSM_AT(g, i, j), b = LSM_AT(g, i, j + 1);
+      if ((a <= 0.0) == (b <= 0.0)) continue;
+      const double x = cx_of(g, i), y = cy_of(g, j) + g->dy * a / (a - b);
+      const double r = hypot(x - x0, y - y0);
+      sum += r;
+      dev = fmax(dev, fabs(r - r_ref));
+      ++n;
+    }
+  if (maxdev) *maxdev = dev;
+  if (count) *count = n;
+  assert_true(n > 0);
+  return sum / n;
+}
+
+static double max_abs_diff(const lsm_grid *a, const lsm_grid *b) {
+  double m = 0.0;
+  for (int j = 0; j < a->ny; ++j)
+    for (int i = 0; i < a->nx; ++i) m = fmax(m, fabs((double)LSM_AT(a, i, j) - LSM_AT(b, i, j)));
+  return m;
+}
+
+static double urand(uint64_t *s, double lo, double hi) {
+  return lo + (hi - lo) * (double)(lsm_test_rand(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* ------------------------------------------------------------------------ */
+/* upwind Hamiltonian                                                         */
+
+/* Linear phi: both one-sided differences equal, so every upwind selection
+ * gives |grad phi| = sqrt(a^2 + b^2) and H = F sqrt(a^2 + b^2). */
+static void test_upwind_linear(void **state) {
+  (void)state;
+  const float ab[][2] = {{0.6f, 0.8f}, {-0.6f, 0.8f}, {0.6f, -0.8f}, {-3.0f, -4.0f},
+                         {1.0f, 0.0f}, {0.0f, -2.5f}, {0.0f, 0.0f}};
+  const float Fs[] = {2.0f, 0.5f, -1.5f, -7.0f};
+  for (size_t k = 0; k < sizeof ab / sizeof ab[0]; ++k)
+    for (size_t f = 0; f < sizeof Fs / sizeof Fs[0]; ++f) {
+      const float a = ab[k][0], b = ab[k][1], F = Fs[f];
+      const double want = F * sqrt((double)a * a + (double)b * b);
+      assert_close(lsm_upwind_hamiltonian(F, a, a, b, b), want, 1e-6 * (1 + fabs(want)));
+    }
+  /* F = 0: no motion whatever the gradient. */
+  assert_close(lsm_upwind_hamiltonian(0.0f, -1.0f, 2.0f, 3.0f, -4.0f), 0.0, 0.0);
+}
+
+/* Kinks.  Osher–Sethian (1988):
+ *   F > 0: |grad|^2 = max(dxm,0)^2 + min(dxp,0)^2 + max(dym,0)^2 + min(dyp,0)^2
+ *   F < 0: |grad|^2 = min(dxm,0)^2 + max(dxp,0)^2 + min(dym,0)^2 + max(dyp,0)^2
+ * V-shaped minimum in x (dxm < 0 < dxp), flat in y:
+ *   F > 0 (phi decreasing, the minimum is an outflow point): every term is 0,
+ *         so the upwind gradient is 0 and H = 0.
+ *   F < 0: both sides are upwind, |grad|^2 = dxm^2 + dxp^2 (the Osher–Sethian
+ *         sum; the Godunov/Rouy–Tourin variant would take max(dxm^2, dxp^2)
+ *         instead).  Either way |H| >= |F| max(|dxm|, |dxp|).
+ * A Λ-shaped maximum (dxm > 0 > dxp) is the mirror image. */
+static void test_upwind_kinks(void **state) {
+  (void)state;
+  /* V minimum, asymmetric slopes. */
+  const float dxm = -1.5f, dxp = 0.5f;
+  assert_close(lsm_upwind_hamiltonian(2.0f, dxm, dxp, 0.0f, 0.0f), 0.0, 0.0);
+  const double vneg = lsm_upwind_hamiltonian(-2.0f, dxm, dxp, 0.0f, 0.0f);
+  assert_close(vneg, -2.0 * sqrt(1.5 * 1.5 + 0.5 * 0.5), 1e-6);
+  assert_true(fabs(vneg) >= 2.0 * 1.5 - 1e-6);
+  /* Λ maximum: the mirror image. */
+  assert_close(lsm_upwind_hamiltonian(-2.0f, 1.5f, -0.5f, 0.0f, 0.0f), 0.0, 0.0);
+  assert_close(lsm_upwind_hamiltonian(2.0f, 1.5f, -0.5f, 0.0f, 0.0f),
+               2.0 * sqrt(1.5 * 1.5 + 0.5 * 0.5), 1e-6);
+  /* V in x, linear in y (slope 0.75): F > 0 keeps only the y part. */
+  assert_close(lsm_upwind_hamiltonian(3.0f, dxm, dxp, 0.75f, 0.75f), 3.0 * 0.75, 1e-6);
+  assert_close(lsm_upwind_hamiltonian(-3.0f, dxm, dxp, 0.75f, 0.75f),
+               -3.0 * sqrt(1.5 * 1.5 + 0.5 * 0.5 + 0.75 * 0.75), 1e-6);
+  /* Cone minimum (centre of a disc's SDF, dx = dy = 1): V in both axes. */
+  assert_close(lsm_upwind_hamiltonian(1.0f, -1.0f, 1.0f, -1.0f, 1.0f), 0.0, 0.0);
+  assert_close(lsm_upwind_hamiltonian(-1.0f, -1.0f, 1.0f, -1.0f, 1.0f), -2.0, 1e-6);
+  /* One-sided slope choice away from kinks: phi increasing in x with different
+   * slopes on each side: F > 0 takes the backward difference, F < 0 the forward. */
+  assert_close(lsm_upwind_hamiltonian(1.0f, 0.5f, 2.0f, 0.0f, 0.0f), 0.5, 1e-6);
+  assert_close(lsm_upwind_hamiltonian(-1.0f, 0.5f, 2.0f, 0.0f, 0.0f), -2.0, 1e-6);
+  /* Decreasing in x: F > 0 takes the forward difference, F < 0 the backward. */
+  assert_close(lsm_upwind_hamiltonian(1.0f, -0.5f, -2.0f, 0.0f, 0.0f), 2.0, 1e-6);
+  assert_close(lsm_upwind_hamiltonian(-1.0f, -0.5f, -2.0f, 0.0f, 0.0f), -0.5, 1e-6);
+}
+
+/* ------------------------------------------------------------------------ */
+/* one grid stage with constant F                                           */
+
+/* phi = a x + b y (+ offset), phi_target = phi - c, so F = c everywhere and
+ * every interior stencil is linear: out = phi - dt c sqrt(a^2 + b^2).  The
+ * boundary cells see the zero-gradient ghosts and are excluded (1 cell for
+ * upwind; Roe-Fix too, its narrow sets are one-signed for linear data). */
+static void check_constant_speed(lsm_scheme scheme, double a, double b, double c, float dx,
+                                 float dy) {
+  const int nx = 24, ny = 19;
+  lsm_grid *phi = new_grid(nx, ny, dx, dy), *tgt = new_grid(nx, ny, dx, dy);
+  lsm_grid *out = new_grid(nx, ny, dx, dy);
+  fill_linear(phi, a, b, 0.3);
+  fill_linear(tgt, a, b, 0.3 - c);
+  const float dt = 0.05f;
+  lsm_scheme_stage(scheme, out, phi, phi, tgt, 0.0f, 1.0f, dt, 1);
+  const double g = sqrt(a * a + b * b);
+  int checked = 0;
+  for (int j = 1; j + 1 < ny; ++j)
+    for (int i = 1; i + 1 < nx; ++i) {
+      /* F is computed in float as phi - (phi - c): allow its rounding. */
+      const double want = LSM_AT(phi, i, j) - dt * c * g;
+      assert_close(LSM_AT(out, i, j), want, 2e-5 * (1.0 + fabs(want)));
+      ++checked;
+    }
+  assert_int_equal(checked, (nx - 2) * (ny - 2));
+  /* Shu–Osher combination: out = c0 u0 + c1 (in - dt H). */
+  lsm_scheme_stage(scheme, out, tgt, phi, tgt, 0.25f, 0.75f, dt, 1);
+  for (int j = 1; j + 1 < ny; ++j)
+    for (int i = 1; i + 1 < nx; ++i) {
+      const double want =
+          0.25 * LSM_AT(tgt, i, j) + 0.75 * (LSM_AT(phi, i, j) - dt * c * g);
+      assert_close(LSM_AT(out, i, j), want, 2e-5 * (1.0 + fabs(want)));
+    }
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+  lsm_grid_destroy(&out);
+}
+
+static void test_stage_constant_speed(void **state) {
+  (void)state;
+  for (int s = 0; s < 2; ++s) {
+    const lsm_scheme scheme = s ? LSM_SCHEME_ROEFIX : LSM_SCHEME_UPWIND;
+    check_constant_speed(scheme, 0.7, 0.0, 2.0, 1.0f, 1.0f);   /* linear in x, F > 0 */
+    check_constant_speed(scheme, -1.3, 0.0, 2.0, 1.0f, 1.0f);  /* decreasing, F > 0 */
+    check_constant_speed(scheme, 0.7, 0.0, -1.5, 1.0f, 1.0f);  /* F < 0 */
+    check_constant_speed(scheme, -1.3, 0.0, -1.5, 0.5f, 0.5f); /* F < 0, dx = 0.5 */
+    check_constant_speed(scheme, 0.6, -0.8, 3.0, 0.5f, 1.25f); /* oblique, anisotropic */
+    check_constant_speed(scheme, -0.6, 0.8, -3.0, 1.0f, 0.5f);
+  }
+}
+
+/* ------------------------------------------------------------------------ */
+/* CFL                                                                       */
+
+/* rate = |F| max over (p, q) in {dxm, dxp} x {dym, dyp} of (|p|/dx + |q|/dy)/|(p,q)|. */
+static void test_cfl(void **state) {
+  (void)state;
+  double dt;
+  /* phi = x, dx = dy = 1, F = 2: p = 1, q = 0 -> rate = 2 * 1 -> dt = cfl / 2. */
+  lsm_grid *phi = new_grid(16, 12, 1.0f, 1.0f), *tgt = new_grid(16, 12, 1.0f, 1.0f);
+  fill_linear(phi, 1.0, 0.0, 0.0);
+  fill_linear(tgt, 1.0, 0.0, -2.0);
+  lsm_cfl_dt(phi, tgt, 0.75, 1, &dt);
+  assert_close(dt, 0.75 / 2.0, 1e-6);
+  lsm_cfl_dt(phi, tgt, 0.5, 2, &dt);
+  assert_close(dt, 0.5 / 2.0, 1e-6);
+  /* F = -2: same |F|. */
+  fill_linear(tgt, 1.0, 0.0, 2.0);
+  lsm_cfl_dt(phi, tgt, 0.75, 1, &dt);
+  assert_close(dt, 0.75 / 2.0, 1e-6);
+  /* phi == phi_target: no motion, dt = +inf. */
+  lsm_grid_copy(tgt, phi);
+  lsm_cfl_dt(phi, tgt, 0.75, 1, &dt);
+  assert_true(isinf(dt) && dt > 0);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+
+  /* dx = dy = 0.5, phi = x: p = 1, rate = 2 / 0.5 = 4 -> dt = cfl / 4. */
+  phi = new_grid(16, 12, 0.5f, 0.5f);
+  tgt = new_grid(16, 12, 0.5f, 0.5f);
+  fill_linear(phi, 1.0, 0.0, 0.0);
+  fill_linear(tgt, 1.0, 0.0, -2.0);
+  lsm_cfl_dt(phi, tgt, 0.75, 1, &dt);
+  assert_close(dt, 0.75 / 4.0, 1e-6);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+
+  /* Anisotropic dx = 0.5, dy = 1, phi = x + y, F = 2: interior p = q = 1,
+   * (2 + 1)/sqrt 2 = 2.1213 beats the boundary combinations (p,0): 2, (0,q): 1.
+   * rate = 2 * 3/sqrt 2 -> dt = cfl sqrt 2 / 6. */
+  phi = new_grid(16, 12, 0.5f, 1.0f);
+  tgt = new_grid(16, 12, 0.5f, 1.0f);
+  fill_linear(phi, 1.0, 1.0, 0.0);
+  fill_linear(tgt, 1.0, 1.0, -2.0);
+  lsm_cfl_dt(phi, tgt, 0.75, 1, &dt);
+  assert_close(dt, 0.75 * sqrt(2.0) / 6.0, 1e-6);
+  /* phi = x only on the same grid: rate = 2 / 0.5 -> dt = cfl / 4. */
+  fill_linear(phi, 1.0, 0.0, 0.0);
+  fill_linear(tgt, 1.0, 0.0, -2.0);
+  lsm_cfl_dt(phi, tgt, 0.75, 1, &dt);
+  assert_close(dt, 0.75 / 4.0, 1e-6);
+  /* phi = y only: rate = 2 / 1 -> dt = cfl / 2. */
+  fill_linear(phi, 0.0, 1.0, 0.0);
+  fill_linear(tgt, 0.0, 1.0, -2.0);
+  lsm_cfl_dt(phi, tgt, 0.75, 1, &dt);
+  assert_close(dt, 0.75 / 2.0, 1e-6);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+
+  /* Per-cell rate on a kink: p in {-1, 1}, q in {0.5, 2}, dx = dy = 1, F = -3:
+   * max over the four of (|p| + |q|)/|(p,q)| = (1 + 1... ) -> (1, 2): 3/sqrt5,
+   * (1, 0.5): 1.5/sqrt1.25 = 1.3416; 3/sqrt5 = 1.3416 too; both equal. */
+  assert_close(lsm_cfl_rate(-3.0f, -1.0f, 1.0f, 0.5f, 2.0f, 1.0f, 1.0f), 3.0 * 3.0 / sqrt(5.0),
+               1e-5);
+  /* Diagonal: (1,1) gives the maximum sqrt 2. */
+  assert_close(lsm_cfl_rate(1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f), sqrt(2.0), 1e-6);
+  /* Zero gradient: rate 0. */
+  assert_close(lsm_cfl_rate(5.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.0f, 1.0f), 0.0, 0.0);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Roe-Fix                                                                   */
+
+/* Algorithm 3.1 (METHOD.md §3 step 5) written out directly, in double.
+ * Returns Hhat; *branch gets the LSM_ROEFIX_* code. */
+static void signs_h1(double F, const double *P, int np, const double *Q, int nq, int *pos,
+                     int *neg, double *mx) {
+  *pos = *neg = 0;
+  *mx = 0.0;
+  for (int a = 0; a < np; ++a)
+    for (int b = 0; b < nq; ++b) {
+      const double g = sqrt(P[a] * P[a] + Q[b] * Q[b]);
+      const double h = g > 0 ? F * P[a] / g : 0.0;
+      if (h > 0) *pos = 1;
+      if (h < 0) *neg = 1;
+      *mx = fmax(*mx, fabs(h));
+    }
+}
+
+static double roefix_reference(double F, const float *xm, const float *xp, const float *ym,
+                               const float *yp, int *branch) {
+  const double Ix[2] = {xm[3], xp[3]}, Iy[2] = {ym[3], yp[3]};
+  double Ixw[14], Iyw[14];
+  for (int k = 0; k < 7; ++k) {
+    Ixw[2 * k] = xm[k];
+    Ixw[2 * k + 1] = xp[k];
+    Iyw[2 * k] = ym[k];
+    Iyw[2 * k + 1] = yp[k];
+  }
+  int p1, n1, p2, n2;
+  double m1, m2;
+  signs_h1(F, Ix, 2, Iy, 2, &p1, &n1, &m1); /* H1 = F p/|.| over I_x x I_y */
+  signs_h1(F, Iy, 2, Ix, 2, &p2, &n2, &m2); /* H2 = F q/|.| over I_x x I_y */
+  double px, py, ax = 0.0, ay = 0.0;
+  if (!(p1 && n1) && !(p2 && n2)) {
+    px = p1 ? Ix[0] : Ix[1];
+    py = p2 ? Iy[0] : Iy[1];
+    *branch = LSM_ROEFIX_UPWIND;
+  } else {
+    signs_h1(F, Ix, 2, Iyw, 14, &p1, &n1, &m1); /* H1 over I_x x I_y_new */
+    signs_h1(F, Iy, 2, Ixw, 14, &p2, &n2, &m2); /* H2 over I_x_new x I_y */
+    const int one1 = !(p1 && n1), one2 = !(p2 && n2);
+    if (one1 && !one2) {
+      px = p1 ? Ix[0] : Ix[1];
+      py = 0.5 * (Iy[0] + Iy[1]);
+      ay = m2;
+      *branch = LSM_ROEFIX_LLF_Y;
+    } else if (!one1 && one2) {
+      px = 0.5 * (Ix[0] + Ix[1]);
+      py = p2 ? Iy[0] : Iy[1];
+      ax = m1;
+      *branch = LSM_ROEFIX_LLF_X;
+    } else {
+      /* For H = F|grad|, sign(H1) = sign(F p) whatever q is, so widening in y
+       * cannot make H1 one-signed: "neither" is the only case left. */
+      assert_true(!one1 && !one2);
+      px = 0.5 * (Ix[0] + Ix[1]);
+      py = 0.5 * (Iy[0] + Iy[1]);
+      ax = m1;
+      ay = m2;
+      *branch = LSM_ROEFIX_LLF_XY;
+    }
+  }
+  return F * sqrt(px * px + py * py) - ax * 0.5 * (Ix[1] - Ix[0]) - ay * 0.5 * (Iy[1] - Iy[0]);
+}
+
+static void fill7(float *v, float value) {
+  for (int k = 0; k < 7; ++k) v[k] = value;
+}
+
+/* Hand-built stencils for each branch, Hhat computed by hand. */
+static void test_roefix_branches(void **state) {
+  (void)state;
+  float xm[7], xp[7], ym[7], yp[7];
+  int br = -1;
+  double h;
+
+  /* 1. UPWIND, smooth but not linear: all p > 0, all q > 0.
+   *    F = 2 > 0: H1, H2 > 0 -> phi_x* = xm = 0.5, phi_y* = ym = 0.2.
+   *    Hhat = 2 sqrt(0.25 + 0.04). */
+  fill7(xm, 9.0f), fill7(xp, -9.0f), fill7(ym, 9.0f), fill7(yp, -9.0f); /* never read */
+  xm[3] = 0.5f, xp[3] = 1.0f, ym[3] = 0.2f, yp[3] = 0.4f;
+  h = lsm_roefix_hamiltonian_ex(2.0f, xm, xp, ym, yp, &br);
+  assert_int_equal(br, LSM_ROEFIX_UPWIND);
+  assert_close(h, 2.0 * sqrt(0.29), 1e-6);
+  /*    F = -2: H1, H2 < 0 -> phi_x* = xp = 1, phi_y* = yp = 0.4. */
+  h = lsm_roefix_hamiltonian_ex(-2.0f, xm, xp, ym, yp, &br);
+  assert_int_equal(br, LSM_ROEFIX_UPWIND);
+  assert_close(h, -2.0 * sqrt(1.16), 1e-6);
+  /*    Zero differences count as one-signed: p = 0 on one side. */
+  xm[3] = 0.0f, xp[3] = 0.8f, ym[3] = 0.6f, yp[3] = 0.6f;
+  h = lsm_roefix_hamiltonian_ex(1.0f, xm, xp, ym, yp, &br);
+  assert_int_equal(br, LSM_ROEFIX_UPWIND);
+  /*    H1 >= 0 over the set and positive somewhere -> phi_x* = xm = 0. */
+  assert_close(h, 0.6, 1e-6);
+
+  /* 2. LLF_X: V minimum in x (xm = -1, xp = 1), q > 0 everywhere (H2 one-signed),
+   *    F = 1.  Widened I_y_new = {0.5 at the centre, 0.1 .. 2.0 elsewhere}.
+   *    phi_x* = mean = 0, phi_y* = ym = 0.5 (H2 > 0),
+   *    alpha_x = max |p|/|(p,q)| over p in {-1,1}, q in I_y_new = 1/sqrt(1 + 0.1^2)
+   *    (smallest |q| = 0.1),
+   *    Hhat = 1 * sqrt(0 + 0.25) - alpha_x (1 - (-1))/2 = 0.5 - 1/sqrt(1.01). */
+  fill7(xm, 0.3f), fill7(xp, 0.3f);
+  const float qs[7] = {2.0f, 0.7f, 0.1f, 0.5f, 1.1f, 0.9f, 1.5f};
+  for (int k = 0; k < 7; ++k) ym[k] = qs[k], yp[k] = qs[k] + 0.05f;
+  xm[3] = -1.0f, xp[3] = 1.0f, ym[3] = 0.5f, yp[3] = 0.5f;
+  h = lsm_roefix_hamiltonian_ex(1.0f, xm, xp, ym, yp, &br);
+  assert_int_equal(br, LSM_ROEFIX_LLF_X);
+  assert_close(h, 0.5 - 1.0 / sqrt(1.01), 1e-6);
+
+  /* 3. LLF_Y: the transpose, with F = 2: xm = xp = 0.5, ym = -1, yp = 1,
+   *    smallest |p| in I_x_new is 0.1 -> alpha_y = 2/sqrt(1.01),
+   *    phi_x* = xm = 0.5 (H1 > 0), phi_y* = 0,
+   *    Hhat = 2 * 0.5 - alpha_y (1 - (-1))/2 = 1 - 2/sqrt(1.01). */
+  fill7(ym, 0.3f), fill7(yp, 0.3f);
+  for (int k = 0; k < 7; ++k) xm[k] = qs[k], xp[k] = qs[k] + 0.05f;
+  xm[3] = 0.5f, xp[3] = 0.5f, ym[3] = -1.0f, yp[3] = 1.0f;
+  h = lsm_roefix_hamiltonian_ex(2.0f, xm, xp, ym, yp, &br);
+  assert_int_equal(br, LSM_ROEFIX_LLF_Y);
+  assert_close(h, 1.0 - 2.0 / sqrt(1.01), 1e-6);
+
+  /* 4. LLF_XY: F = -1.5, xm = -1, xp = 2 (V in x), ym = 1, yp = -0.5 (Λ in y).
+   *    Both H1 and H2 change sign.  phi_x* = 0.5, phi_y* = 0.25.
+   *    I_y_new: {1, -0.5} and the others with smallest |q| = 0.25 ->
+   *      alpha_x = 1.5 * 2 / sqrt(4 + 0.0625)  (p = 2, q = 0.25);
+   *    I_x_new: {-1, 2} and the others with smallest |p| = 0.5 ->
+   *      alpha_y = 1.5 * 1 / sqrt(0.25 + 1)     (p = 0.5, q = 1).
+   *    Hhat = -1.5 sqrt(0.25 + 0.0625) - alpha_x (2 - (-1))/2 - alpha_y (-0.5 - 1)/2. */
+  {
+    const float xo[7] = {0.9f, -1.2f, 0.5f, 0.0f, 1.7f, -0.6f, 3.0f};
+    const float yo[7] = {0.6f, -0.8f, 1.4f, 0.0f, -0.25f, 0.3f, -2.0f};
+    for (int k = 0; k < 7; ++k) xm[k] = xo[k], xp[k] = -xo[k], ym[k] = yo[k], yp[k] = -yo[k];
+    xm[3] = -1.0f, xp[3] = 2.0f, ym[3] = 1.0f, yp[3] = -0.5f;
+    const double ax = 1.5 * 2.0 / sqrt(4.0 + 0.0625), ay = 1.5 / sqrt(1.25);
+    const double want = -1.5 * sqrt(0.3125) - ax * 1.5 - ay * (-0.75);
+    h = lsm_roefix_hamiltonian_ex(-1.5f, xm, xp, ym, yp, &br);
+    assert_int_equal(br, LSM_ROEFIX_LLF_XY);
+    assert_close(h, want, 1e-5);
+  }
+
+  /* The wrapper returns the same value. */
+  assert_close(lsm_roefix_hamiltonian(-1.5f, xm, xp, ym, yp), h, 0.0);
+}
+
+/* Random stencils: the kernel agrees with the reference implementation of the
+ * algorithm above, branch and value, and every branch is visited. */
+static void test_roefix_random_vs_reference(void **state) {
+  (void)state;
+  uint64_t rng = 0xC0FFEE123ull;
+  int seen[4] = {0, 0, 0, 0};
+  for (int c = 0; c < 20000; ++c) {
+    float xm[7], xp[7], ym[7], yp[7];
+    for (int k = 0; k < 7; ++k) {
+      xm[k] = (float)urand(&rng, -2, 2);
+      xp[k] = (float)urand(&rng, -2, 2);
+      ym[k] = (float)urand(&rng, -2, 2);
+      yp[k] = (float)urand(&rng, -2, 2);
+    }
+    if (c % 4 == 1) xp[3] = xm[3] * (float)urand(&rng, 0.1, 3.0); /* x one-signed */
+    if (c % 4 == 2) yp[3] = ym[3] * (float)urand(&rng, 0.1, 3.0); /* y one-signed */
+    const float F = (float)urand(&rng, -5, 5);
+    int b1 = -1, b2 = -2;
+    const double got = lsm_roefix_hamiltonian_ex(F, xm, xp, ym, yp, &b1);
+    const double want = roefix_reference(F, xm, xp, ym, yp, &b2);
+    assert_int_equal(b1, b2);
+    assert_close(got, want, 2e-5 * (1.0 + fabs(want)));
+    seen[b1]++;
+  }
+  for (int b = 0; b < 4; ++b) assert_true(seen[b] > 100);
+}
+
+/* Linear data (all differences equal): Roe-Fix is pure upwind and equals the
+ * Osher–Sethian upwind Hamiltonian, F sqrt(a^2 + b^2). */
+static void test_roefix_linear_equals_upwind(void **state) {
+  (void)state;
+  uint64_t rng = 42;
+  for (int c = 0; c < 2000; ++c) {
+    float xm[7], xp[7], ym[7], yp[7];
+    const float a = (float)urand(&rng, -3, 3), b = (float)urand(&rng, -3, 3);
+    const float F = (float)urand(&rng, -4, 4);
+    fill7(xm, a), fill7(xp, a), fill7(ym, b), fill7(yp, b);
+    int br = -1;
+    const double r = lsm_roefix_hamiltonian_ex(F, xm, xp, ym, yp, &br);
+    assert_int_equal(br, LSM_ROEFIX_UPWIND);
+    assert_close(r, lsm_upwind_hamiltonian(F, a, a, b, b), 1e-5 * (1 + fabs(r)));
+    assert_close(r, F * sqrt((double)a * a + (double)b * b), 1e-5 * (1 + fabs(r)));
+  }
+  /* And whole grid stages agree on a linear field (interior). */
+  lsm_grid *phi = new_grid(20, 20, 1.0f, 1.0f), *tgt = new_grid(20, 20, 1.0f, 1.0f);
+  lsm_grid *o1 = new_grid(20, 20, 1.0f, 1.0f), *o2 = new_grid(20, 20, 1.0f, 1.0f);
+  fill_linear(phi, 0.3, -1.1, 0.0);
+  fill_circle(tgt, 2.0, 3.0, 5.0, 1.0); /* F varies in space, sign too */
+  lsm_scheme_stage(LSM_SCHEME_UPWIND, o1, phi, phi, tgt, 0.0f, 1.0f, 0.1f, 1);
+  lsm_scheme_stage(LSM_SCHEME_ROEFIX, o2, phi, phi, tgt, 0.0f, 1.0f, 0.1f, 1);
+  for (int j = 1; j < 19; ++j)
+    for (int i = 1; i < 19; ++i) assert_close(LSM_AT(o1, i, j), LSM_AT(o2, i, j), 1e-5);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+  lsm_grid_destroy(&o1);
+  lsm_grid_destroy(&o2);
+}
+
+/* Grid stages against per-cell references assembled here from the stencil
+ * (checks the stencil gathering: offsets, strides, ghost cells, dx != dy).
+ * Field: the distance to the union of two discs (kinks along the bisector
+ * and at the centres), target a third disc, so every Roe-Fix branch occurs. */
+static void test_stage_vs_cell_reference(void **state) {
+  (void)state;
+  const int nx = 40, ny = 33;
+  const float dx = 0.8f, dy = 1.1f;
+  lsm_grid *phi = new_grid(nx, ny, dx, dy), *tgt = new_grid(nx, ny, dx, dy);
+  lsm_grid *out = new_grid(nx, ny, dx, dy);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double x = cx_of(phi, i), y = cy_of(phi, j);
+      LSM_AT(phi, i, j) = (float)fmin(hypot(x - 5.2, y - 1.3) - 6.0, hypot(x + 7.9, y + 2.2) - 4.5);
+      LSM_AT(tgt, i, j) = (float)(hypot(x - 1.0, y + 0.7) - 9.0);
+    }
+  const float dt = 0.07f;
+  int seen[4] = {0, 0, 0, 0};
+  for (int sc = 0; sc < 2; ++sc) {
+    lsm_scheme_stage(sc ? LSM_SCHEME_ROEFIX : LSM_SCHEME_UPWIND, out, phi, phi, tgt, 0.0f, 1.0f,
+                     dt, 2);
+    lsm_grid_fill_ghosts(phi); /* zero-gradient, as the stage does */
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const double F = (double)LSM_AT(phi, i, j) - LSM_AT(tgt, i, j);
+        double H;
+        if (!sc) {
+          H = lsm_upwind_hamiltonian((float)F, (LSM_AT(phi, i, j) - LSM_AT(phi, i - 1, j)) / dx,
+                                     (LSM_AT(phi, i + 1, j) - LSM_AT(phi, i, j)) / dx,
+                                     (LSM_AT(phi, i, j) - LSM_AT(phi, i, j - 1)) / dy,
+                                     (LSM_AT(phi, i, j + 1) - LSM_AT(phi, i, j)) / dy);
+        } else {
+          float xm[7], xp[7], ym[7], yp[7];
+          for (int k = 0; k < 7; ++k) {
+            const int d = k - 3;
+            xm[k] = (LSM_AT(phi, i + d, j) - LSM_AT(phi, i + d - 1, j)) / dx;
+            xp[k] = (LSM_AT(phi, i + d + 1, j) - LSM_AT(phi, i + d, j)) / dx;
+            ym[k] = (LSM_AT(phi, i, j + d) - LSM_AT(phi, i, j + d - 1)) / dy;
+            yp[k] = (LSM_AT(phi, i, j + d + 1) - LSM_AT(phi, i, j + d)) / dy;
+          }
+          int br;
+          H = roefix_reference(F, xm, xp, ym, yp, &br);
+          seen[br]++;
+        }
+        const double want = LSM_AT(phi, i, j) - dt * H;
+        if (fabs(LSM_AT(out, i, j) - want) > 2e-5 * (1.0 + fabs(want)))
+          fail_msg("%s stage at cell (%d, %d): %.7g, reference %.7g", sc ? "roe-fix" : "upwind", i,
+                   j, LSM_AT(out, i, j), want);
+      }
+  }
+  for (int b = 0; b < 4; ++b) assert_true(seen[b] > 0);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+  lsm_grid_destroy(&out);
+}
+
+/* At the apex of a cone (a cell at the centre of a disc's SDF: differences
+ * -1 | +1 in both axes), F = -4:
+ *   upwind (Osher–Sethian, F < 0): |grad|^2 = 1 + 1 + 1 + 1 -> H = -8;
+ *   Roe-Fix: both H1 and H2 change sign (LLF_XY), phi_x* = phi_y* = 0,
+ *     alpha_x = alpha_y = |F| * 1/sqrt(1 + 1) (all other differences on the
+ *     row and column are +-1), Hhat = -alpha_x - alpha_y = -4 sqrt 2. */
+static void test_roefix_cone_apex(void **state) {
+  (void)state;
+  const int n = 32;
+  lsm_grid *phi = new_grid(n, n, 1.0f, 1.0f), *tgt = new_grid(n, n, 1.0f, 1.0f);
+  lsm_grid *out = new_grid(n, n, 1.0f, 1.0f);
+  /* cx_of(16) = 0.5: the apex is cell (16, 16). */
+  fill_circle(phi, 0.5, 0.5, 8.0, 1.0);
+  fill_circle(tgt, 0.5, 0.5, 4.0, 1.0);
+  const float dt = 0.1f;
+  lsm_scheme_stage(LSM_SCHEME_UPWIND, out, phi, phi, tgt, 0.0f, 1.0f, dt, 1);
+  assert_close(LSM_AT(out, 16, 16), -8.0 - dt * -8.0, 1e-5);
+  lsm_scheme_stage(LSM_SCHEME_ROEFIX, out, phi, phi, tgt, 0.0f, 1.0f, dt, 1);
+  assert_close(LSM_AT(out, 16, 16), -8.0 - dt * -4.0 * sqrt(2.0), 1e-5);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+  lsm_grid_destroy(&out);
+}
+
+/* ------------------------------------------------------------------------ */
+/* integrators                                                               */
+
+/* One step from the circle SDF r1 = 20 toward r2 = 10 (F = -10 everywhere).
+ * Away from the centre the upwind gradient is G ~ 1 and the semi-discrete
+ * problem is the linear ODE u' = -G u for u = phi - phi_T, so
+ *   Euler:  phi - dt F G
+ *   RK2:    phi - dt F G + dt^2 F G^2 / 2      (+ O(dt^3): G varies in space)
+ *   RK3:    phi - dt F G + dt^2 F G^2 / 2 - dt^3 F G^3 / 6.
+ * So |Euler - RK2| = dt^2 |F| G^2 / 2 (halving dt divides it by 4) and
+ * |RK2 - RK3| = O(dt^3) (divided by 8). */
+static void test_integrators_agree(void **state) {
+  (void)state;
+  const int n = 64;
+  lsm_grid *phi0 = new_grid(n, n, 1.0f, 1.0f), *tgt = new_grid(n, n, 1.0f, 1.0f);
+  fill_circle(phi0, 0, 0, 20.0, 1.0);
+  fill_circle(tgt, 0, 0, 10.0, 1.0);
+  lsm_grid *e = NULL, *r2 = NULL, *r3 = NULL;
+  lsm_stepper *st = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_stepper_create(phi0, &st, &err), LSM_OK);
+  double d12[2], d23[2];
+  const float dts[2] = {0.04f, 0.02f};
+  for (int s = 0; s < 2; ++s) {
+    for (int sc = 0; sc < 2; ++sc) {
+      const lsm_scheme scheme = sc ? LSM_SCHEME_ROEFIX : LSM_SCHEME_UPWIND;
+      assert_int_equal(lsm_grid_clone(phi0, &e, &err), LSM_OK);
+      assert_int_equal(lsm_grid_clone(phi0, &r2, &err), LSM_OK);
+      assert_int_equal(lsm_grid_clone(phi0, &r3, &err), LSM_OK);
+      lsm_step(st, scheme, LSM_TIME_EULER, e, tgt, dts[s], 1);
+      lsm_step(st, scheme, LSM_TIME_RK2, r2, tgt, dts[s], 1);
+      lsm_step(st, scheme, LSM_TIME_RK3, r3, tgt, dts[s], 1);
+      /* Compare in an annulus 12 <= |x| <= 28 (smooth, away from the centre
+       * kink and the boundary). */
+      double m12 = 0, m23 = 0, m12min = INFINITY;
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const double rr = hypot(cx_of(phi0, i), cy_of(phi0, j));
+          if (rr < 12 || rr > 28) continue;
+          const double a = fabs((double)LSM_AT(e, i, j) - LSM_AT(r2, i, j));
+          m12 = fmax(m12, a);
+          m12min = fmin(m12min, a);
+          m23 = fmax(m23, fabs((double)LSM_AT(r2, i, j) - LSM_AT(r3, i, j)));
+        }
+      /* dt^2 |F| G^2 / 2 with G in [0.85, 1.05] (one-sided differences of
+       * a circle of radius >= 12 with dx = 1). */
+      const double ref = 0.5 * dts[s] * dts[s] * 10.0;
+      assert_true(m12 <= ref * 1.05 * 1.05 * 1.01);
+      assert_true(m12min >= ref * 0.85 * 0.85 * 0.99);
+      assert_true(m23 <= 0.2 * ref);
+      if (sc == 0) d12[s] = m12, d23[s] = m23;
+      lsm_grid_destroy(&e);
+      lsm_grid_destroy(&r2);
+      lsm_grid_destroy(&r3);
+    }
+  }
+  /* Second-order agreement: halving dt divides Euler-RK2 by ~4. */
+  assert_true(d12[0] / d12[1] > 3.5 && d12[0] / d12[1] < 4.5);
+  /* RK2-RK3 is O(dt^3): halving dt divides it by 8 asymptotically; the values
+   * are ~1e-4 and ~1e-5, so allow float round-off (values ~30: ulp 2e-6). */
+  assert_true(d23[1] <= d23[0] / 4.0 + 2e-6);
+  lsm_stepper_destroy(&st);
+  lsm_grid_destroy(&phi0);
+  lsm_grid_destroy(&tgt);
+}
+
+/* ------------------------------------------------------------------------ */
+/* concentric circles: analytic front                                        */
+
+typedef struct circle_run {
+  double err[3]; /* |front - exact| at t = 0.5, 1, 2 */
+} circle_run;
+
+static const double circle_times[3] = {0.5, 1.0, 2.0};
+
+/* A square grid of side L = 64 (physical), n cells, centred. */
+static circle_run run_circles(int n, double r1, double r2, lsm_scheme scheme, lsm_time time,
+                              double cfl) {
+  const float dx = (float)(64.0 / n);
+  lsm_grid *src = new_grid(n, n, dx, dx), *tgt = new_grid(n, n, dx, dx);
+  fill_circle(src, 0, 0, r1, 1.0);
+  fill_circle(tgt, 0, 0, r2, 1.0);
+  lsm_morph_opts o;
+  lsm_morph_opts_default(&o);
+  o.scheme = scheme;
+  o.time = time;
+  o.cfl = cfl;
+  o.threads = 2;
+  lsm_morph *m = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_morph_create(src, tgt, &o, &m, &err), LSM_OK);
+  circle_run out;
+  for (int k = 0; k < 3; ++k) {
+    const double t = circle_times[k];
+    assert_int_equal(lsm_morph_advance_to(m, t, 1000000, &err), LSM_OK);
+    assert_close(lsm_morph_time(m), t, 1e-9);
+    const double exact = r2 + (r1 - r2) * exp(-t);
+    const double r = front_radius(lsm_morph_phi(m), 0, 0, exact, NULL, NULL);
+    out.err[k] = fabs(r - exact);
+  }
+  lsm_morph_destroy(&m);
+  lsm_grid_destroy(&src);
+  lsm_grid_destroy(&tgt);
+  return out;
+}
+
+static double max3(const double *v) { return fmax(v[0], fmax(v[1], v[2])); }
+
+/* The measurement itself: the mean crossing radius of the exact SDF is the
+ * radius (linear interpolation of a circle SDF along grid lines is accurate
+ * to O(dx^2 / r)). */
+static void test_front_measure(void **state) {
+  (void)state;
+  lsm_grid *g = new_grid(64, 64, 1.0f, 1.0f);
+  for (double r = 10.0; r <= 25.0; r += 2.5) {
+    fill_circle(g, 0, 0, r, 1.0);
+    double dev;
+    int n;
+    assert_close(front_radius(g, 0, 0, r, &dev, &n), r, 0.02);
+    assert_true(dev < 0.1);
+    /* about 8 r crossings: 2 on each of the ~2r rows and ~2r columns */
+    assert_true(n >= 8 * r - 8 && n <= 8 * r + 8);
+  }
+  lsm_grid_destroy(&g);
+}
+
+static void check_circle_convergence(lsm_scheme scheme, double r1, double r2) {
+  const circle_run c1 = run_circles(64, r1, r2, scheme, LSM_TIME_EULER, 0.75);
+  const circle_run c2 = run_circles(128, r1, r2, scheme, LSM_TIME_EULER, 0.75);
+  print_message("circle %s %g->%g: dx=1 err %.4f %.4f %.4f | dx=0.5 err %.4f %.4f %.4f | "
+                "ratio %.2f\n",
+                lsm_scheme_name(scheme), r1, r2, c1.err[0], c1.err[1], c1.err[2], c2.err[0],
+                c2.err[1], c2.err[2], max3(c1.err) / max3(c2.err));
+  for (int k = 0; k < 3; ++k) {
+    assert_true(c1.err[k] < 0.5);
+    assert_true(c2.err[k] < 0.5);
+  }
+  /* First order: halving dx must cut the worst error by a clear factor. */
+  assert_true(max3(c2.err) * 1.5 <= max3(c1.err));
+}
+
+static void test_circles_upwind(void **state) {
+  (void)state;
+  check_circle_convergence(LSM_SCHEME_UPWIND, 20.0, 10.0); /* shrink */
+  check_circle_convergence(LSM_SCHEME_UPWIND, 10.0, 20.0); /* grow */
+}
+
+static void test_circles_roefix(void **state) {
+  (void)state;
+  check_circle_convergence(LSM_SCHEME_ROEFIX, 20.0, 10.0);
+  check_circle_convergence(LSM_SCHEME_ROEFIX, 10.0, 20.0);
+}
+
+/* Time accuracy.  Against a reference with a 20x smaller step (same grid,
+ * so the spatial error cancels) RK3 at CFL 0.75 is closer than Euler at
+ * CFL 0.75, whose time error is O(dt): the radius error of Euler at t is
+ * (r1 - r2) e^{-t} t dt / 2 to first order (0.13 px at t = 1, dt = 0.053).
+ * Against the exact solution, RK3 is not worse than Euler beyond the spatial
+ * error's share (both have the same spatial error). */
+static void test_integrators_circle(void **state) {
+  (void)state;
+  const double r1 = 20.0, r2 = 10.0;
+  const circle_run e = run_circles(64, r1, r2, LSM_SCHEME_UPWIND, LSM_TIME_EULER, 0.75);
+  const circle_run r2k = run_circles(64, r1, r2, LSM_SCHEME_UPWIND, LSM_TIME_RK2, 0.75);
+  const circle_run r3 = run_circles(64, r1, r2, LSM_SCHEME_UPWIND, LSM_TIME_RK3, 0.75);
+  print_message("circle vs exact: euler %.4f %.4f %.4f | rk2 %.4f %.4f %.4f | rk3 %.4f %.4f "
+                "%.4f\n",
+                e.err[0], e.err[1], e.err[2], r2k.err[0], r2k.err[1], r2k.err[2], r3.err[0],
+                r3.err[1], r3.err[2]);
+  for (int k = 0; k < 3; ++k) {
+    assert_true(r3.err[k] < 0.5);
+    assert_true(r2k.err[k] < 0.5);
+  }
+  assert_true(max3(r3.err) <= max3(e.err) + 1e-3);
+
+  /* Time error alone: signed radii against a small-step reference. */
+  const int n = 64;
+  lsm_grid *src = new_grid(n, n, 1.0f, 1.0f), *tgt = new_grid(n, n, 1.0f, 1.0f);
+  fill_circle(src, 0, 0, r1, 1.0);
+  fill_circle(tgt, 0, 0, r2, 1.0);
+  double rad[4];
+  const lsm_time times[4] = {LSM_TIME_EULER, LSM_TIME_RK2, LSM_TIME_RK3, LSM_TIME_RK3};
+  const double cfls[4] = {0.75, 0.75, 0.75, 0.0375};
+  double dt_euler = 0;
+  for (int k = 0; k < 4; ++k) {
+    lsm_morph_opts o;
+    lsm_morph_opts_default(&o);
+    o.time = times[k];
+    o.cfl = cfls[k];
+    lsm_morph *m = NULL;
+    lsm_err err;
+    lsm_err_clear(&err);
+    assert_int_equal(lsm_morph_create(src, tgt, &o, &m, &err), LSM_OK);
+    if (k == 0) dt_euler = lsm_morph_dt(m);
+    assert_int_equal(lsm_morph_advance_to(m, 1.0, 1000000, &err), LSM_OK);
+    rad[k] = front_radius(lsm_morph_phi(m), 0, 0, 0, NULL, NULL);
+    lsm_morph_destroy(&m);
+  }
+  const double te = fabs(rad[0] - rad[3]), t2 = fabs(rad[1] - rad[3]), t3 = fabs(rad[2] - rad[3]);
+  print_message("time error at t=1 (dt %.4f): euler %.4f rk2 %.5f rk3 %.5f\n", dt_euler, te, t2,
+                t3);
+  /* Euler's predicted first-order error, within 40 %. */
+  const double pred = (r1 - r2) * exp(-1.0) * 1.0 * dt_euler / 2.0;
+  assert_true(te > 0.6 * pred && te < 1.4 * pred);
+  assert_true(t2 < 0.25 * te);
+  assert_true(t3 < 0.25 * te);
+  lsm_grid_destroy(&src);
+  lsm_grid_destroy(&tgt);
+}
+
+/* ------------------------------------------------------------------------ */
+/* reinitialisation                                                          */
+
+/* phi = 3 (|x| - r): |grad phi| = 3.  After 40 iterations (band ~ 20 px)
+ * |grad phi| is within 0.1 of 1 within 4 px of the front, and the front has
+ * not moved (< 0.1 px). */
+static void test_reinit(void **state) {
+  (void)state;
+  const int n = 64;
+  const double r = 15.3;
+  lsm_grid *phi = new_grid(n, n, 1.0f, 1.0f);
+  fill_circle(phi, 0.4, -0.3, r, 3.0);
+  double dev0;
+  const double r_before = front_radius(phi, 0.4, -0.3, r, &dev0, NULL);
+  lsm_reinit *re = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_reinit_create(phi, &re, &err), LSM_OK);
+  lsm_reinit_run(re, phi, 40, 1);
+  double dev1;
+  const double r_after = front_radius(phi, 0.4, -0.3, r, &dev1, NULL);
+  print_message("reinit: front radius %.4f -> %.4f (max deviation %.4f -> %.4f)\n", r_before,
+                r_after, dev0, dev1);
+  assert_close(r_after, r_before, 0.1);
+  assert_true(dev1 < dev0 + 0.1);
+  double worst = 0.0, worst_val = 0.0;
+  int cells = 0;
+  for (int j = 1; j + 1 < n; ++j)
+    for (int i = 1; i + 1 < n; ++i) {
+      const double d = hypot(cx_of(phi, i) - 0.4, cy_of(phi, j) + 0.3) - r;
+      if (fabs(d) > 4.0) continue;
+      const double gx = (LSM_AT(phi, i + 1, j) - LSM_AT(phi, i - 1, j)) / 2.0;
+      const double gy = (LSM_AT(phi, i, j + 1) - LSM_AT(phi, i, j - 1)) / 2.0;
+      const double g = hypot(gx, gy);
+      if (fabs(g - 1.0) > worst) worst = fabs(g - 1.0), worst_val = g;
+      ++cells;
+      /* And phi itself is the signed distance there. */
+      assert_close(LSM_AT(phi, i, j), d, 0.25);
+    }
+  print_message("reinit: |grad phi| worst %.4f over %d cells in the 4 px band\n", worst_val,
+                cells);
+  assert_true(cells > 400);
+  assert_true(worst < 0.1);
+  /* Zero iterations: nothing changes. */
+  lsm_grid *copy = NULL;
+  assert_int_equal(lsm_grid_clone(phi, &copy, &err), LSM_OK);
+  lsm_reinit_run(re, phi, 0, 1);
+  assert_close(max_abs_diff(phi, copy), 0.0, 0.0);
+  lsm_grid_destroy(&copy);
+  lsm_reinit_destroy(&re);
+  lsm_grid_destroy(&phi);
+}
+
+/* ------------------------------------------------------------------------ */
+/* fraction -> time                                                          */
+
+static void test_time_of_fraction(void **state) {
+  (void)state;
+  assert_close(lsm_morph_time_of_fraction(0.0), 0.0, 0.0);
+  assert_close(lsm_morph_time_of_fraction(0.5), log(2.0), 1e-15);
+  assert_close(lsm_morph_time_of_fraction(0.75), log(4.0), 1e-14);
+  assert_close(lsm_morph_time_of_fraction(0.9), log(10.0), 1e-13);
+  assert_close(lsm_morph_time_of_fraction(1e-9), 1e-9, 1e-17);
+  double prev = -1.0;
+  for (int k = 0; k < 1000; ++k) {
+    const double t = lsm_morph_time_of_fraction(k / 1000.0);
+    assert_true(t > prev);
+    /* Inverse: 1 - e^{-t} = s. */
+    assert_close(-expm1(-t), k / 1000.0, 1e-12);
+    prev = t;
+  }
+  const double t1 = lsm_morph_time_of_fraction(1.0);
+  assert_true(isinf(t1) && t1 > 0);
+}
+
+/* ------------------------------------------------------------------------ */
+/* morph object                                                               */
+
+/* The morph's fixed dt is the CFL step of phi_source; advance_to lands on t. */
+static void test_morph_dt_and_landing(void **state) {
+  (void)state;
+  lsm_grid *src = new_grid(32, 32, 1.0f, 1.0f), *tgt = new_grid(32, 32, 1.0f, 1.0f);
+  fill_circle(src, 0, 0, 10.0, 1.0);
+  fill_circle(tgt, 0, 0, 6.0, 1.0);
+  lsm_morph_opts o;
+  lsm_morph_opts_default(&o);
+  lsm_morph *m = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_morph_create(src, tgt, &o, &m, &err), LSM_OK);
+  double dt;
+  lsm_cfl_dt(src, tgt, 0.75, 1, &dt);
+  assert_close(lsm_morph_dt(m), dt, 1e-12);
+  /* |F| = 4, rate <= 4 sqrt 2 -> dt >= 0.75 / (4 sqrt 2). */
+  /* (float arithmetic: relative 1e-6) */
+  assert_true(dt >= 0.75 / (4.0 * sqrt(2.0)) * (1 - 1e-6) && dt <= 0.75 / 4.0 * (1 + 1e-6));
+  assert_true(isinf(lsm_morph_cp(m)));
+  assert_close(lsm_morph_residual(m), lsm_grid_diff_norm(src, tgt, 1), 1e-9);
+  /* ||phi_0 - phi_T|| = 4 * 32 (F = -4 on all 1024 cells). */
+  assert_close(lsm_morph_residual(m), 4.0 * 32.0, 1e-3);
+  const double t = 2.5 * dt;
+  assert_int_equal(lsm_morph_advance_to(m, t, 100, &err), LSM_OK);
+  assert_int_equal(lsm_morph_iterations(m), 3);
+  assert_close(lsm_morph_time(m), t, 1e-12);
+  assert_true(lsm_morph_cp(m) > 0 && isfinite(lsm_morph_cp(m)));
+  /* max_iter stops short. */
+  assert_int_equal(lsm_morph_advance_to(m, 100.0, 5, &err), LSM_OK);
+  assert_int_equal(lsm_morph_iterations(m), 5);
+  assert_true(lsm_morph_time(m) < 100.0);
+  lsm_morph_destroy(&m);
+  lsm_grid_destroy(&src);
+  lsm_grid_destroy(&tgt);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_upwind_linear),
+      cmocka_unit_test(test_upwind_kinks),
+      cmocka_unit_test(test_stage_constant_speed),
+      cmocka_unit_test(test_cfl),
+      cmocka_unit_test(test_roefix_branches),
+      cmocka_unit_test(test_roefix_random_vs_reference),
+      cmocka_unit_test(test_roefix_linear_equals_upwind),
+      cmocka_unit_test(test_stage_vs_cell_reference),
+      cmocka_unit_test(test_roefix_cone_apex),
+      cmocka_unit_test(test_integrators_agree),
+      cmocka_unit_test(test_front_measure),
+      cmocka_unit_test(test_circles_upwind),
+      cmocka_unit_test(test_circles_roefix),
+      cmocka_unit_test(test_integrators_circle),
+      cmocka_unit_test(test_reinit),
+      cmocka_unit_test(test_time_of_fraction),
+      cmocka_unit_test(test_morph_dt_and_landing),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,737 @@
+/* End-to-end tests of the stack driver (solver/lsm_stack.c) through an
+ * in-memory slice source (synthetic shapes) and a sink that records every
+ * output slice: output heights, exact input slices, the cone of concentric
+ * discs, topology changes (merge, split, vanish, appear), alignment of
+ * disjoint slices, nested outline contours and the per-iteration mode. */
+#include "tests/lsm_test.h"
+
+#include "solver/lsm_grid.h"
+#include "solver/lsm_sdf.h"
+#include "solver/lsm_stack.h"
+#include "solver/lsm_status.h"
+
+#define PI 3.14159265358979323846
+
+/* ------------------------------------------------------------------------ */
+/* synthetic slices                                                          */
+
+enum { SH_DISC, SH_RECT };
+
+typedef struct shape {
+  int kind;      /* SH_DISC or SH_RECT */
+  int hole;      /* cut out of the shape it lies in */
+  double cx, cy; /* disc centre (pixels: column, row) */
+  double r;      /* disc radius */
+  int x0, y0, x1, y1; /* closed rectangle */
+} shape;
+
+typedef struct slice_def {
+  int n;
+  shape s[4];
+} slice_def;
+
+static shape disc(double cx, double cy, double r) {
+  shape s = {SH_DISC, 0, cx, cy, r, 0, 0, 0, 0};
+  return s;
+}
+static shape disc_hole(double cx, double cy, double r) {
+  shape s = {SH_DISC, 1, cx, cy, r, 0, 0, 0, 0};
+  return s;
+}
+static shape rect(int x0, int y0, int x1, int y1, int hole) {
+  shape s = {SH_RECT, hole, 0, 0, 0, x0, y0, x1, y1};
+  return s;
+}
+
+static int in_shape(const shape *s, int x, int y) {
+  if (s->kind == SH_DISC) return (x - s->cx) * (x - s->cx) + (y - s->cy) * (y - s->cy) <= s->r * s->r;
+  return x >= s->x0 && x <= s->x1 && y >= s->y0 && y <= s->y1;
+}
+
+/* Contour pixel of a primitive: inside it with a 4-neighbour outside it
+ * (the rule of examples/gen_synthetic.c). */
+static int on_contour(const shape *s, int x, int y) {
+  return in_shape(s, x, y) && (!in_shape(s, x - 1, y) || !in_shape(s, x + 1, y) ||
+                               !in_shape(s, x, y - 1) || !in_shape(s, x, y + 1));
+}
+
+typedef struct source_ctx {
+  int width, height;
+  int outline;          /* write contours instead of filled masks */
+  const slice_def *defs;
+  size_t count;
+  int loads;
+} source_ctx;
+
+/* Mask: union of the outer shapes minus the strict inside of the holes. */
+static void paint(const source_ctx *c, const slice_def *d, lsm_mask *m) {
+  for (int y = 0; y < m->height; ++y)
+    for (int x = 0; x < m->width; ++x) {
+      uint8_t v = 0;
+      if (c->outline) {
+        for (int k = 0; k < d->n; ++k) v |= (uint8_t)on_contour(&d->s[k], x, y);
+      } else {
+        for (int k = 0; k < d->n; ++k)
+          if (!d->s[k].hole) v |= (uint8_t)in_shape(&d->s[k], x, y);
+        for (int k = 0; k < d->n; ++k)
+          if (d->s[k].hole && in_shape(&d->s[k], x, y) && !on_contour(&d->s[k], x, y)) v = 0;
+      }
+      m->pixels[(size_t)y * m->width + x] = v;
+    }
+}
+
+static lsm_status src_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
+  source_ctx *c = ctx;
+  LSM_TRY(lsm_mask_create(c->width, c->height, out, err));
+  paint(c, &c->defs[index], out);
+  c->loads++;
+  return LSM_OK;
+}
+
+static const char *src_name(void *ctx, size_t index) {
+  (void)ctx;
+  static char buf[32];
+  snprintf(buf, sizeof buf, "slice%zu", index);
+  return buf;
+}
+
+/* Signed distance of input slice `index` computed directly (the reference
+ * for "input slices come back exactly"). */
+static float *input_phi(const source_ctx *c, size_t index) {
+  lsm_mask m;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_mask_create(c->width, c->height, &m, &err), LSM_OK);
+  paint(c, &c->defs[index], &m);
+  lsm_grid *g = NULL;
+  assert_int_equal(lsm_grid_create(c->width, c->height, 1.0f, 1.0f, &g, &err), LSM_OK);
+  if (c->outline)
+    assert_int_equal(lsm_sdf_from_outline(&m, g, &err), LSM_OK);
+  else
+    assert_int_equal(lsm_sdf_from_mask(&m, g, &err), LSM_OK);
+  float *out = malloc((size_t)c->width * c->height * sizeof *out);
+  assert_non_null(out);
+  for (int y = 0; y < c->height; ++y)
+    for (int x = 0; x < c->width; ++x) out[(size_t)y * c->width + x] = LSM_AT(g, x, y);
+  lsm_grid_destroy(&g);
+  lsm_mask_free(&m);
+  return out;
+}
+
+/* ------------------------------------------------------------------------ */
+/* recording sink                                                            */
+
+typedef struct out_slice {
+  float *phi;
+  double z;
+  long input_index;
+} out_slice;
+
+typedef struct sink_ctx {
+  int width, height;
+  out_slice *s;
+  size_t n, cap;
+} sink_ctx;
+
+static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, double z,
+                            long input_index, lsm_err *err) {
+  (void)err;
+  sink_ctx *c = ctx;
+  assert_int_equal(width, c->width);
+  assert_int_equal(height, c->height);
+  if (c->n == c->cap) {
+    c->cap = c->cap ? 2 * c->cap : 16;
+    c->s = realloc(c->s, c->cap * sizeof *c->s);
+    assert_non_null(c->s);
+  }
+  const size_t bytes = (size_t)width * height * sizeof(float);
+  out_slice *o = &c->s[c->n++];
+  o->phi = malloc(bytes);
+  assert_non_null(o->phi);
+  memcpy(o->phi, phi, bytes);
+  o->z = z;
+  o->input_index = input_index;
+  return LSM_OK;
+}
+
+static void sink_free(sink_ctx *c) {
+  for (size_t k = 0; k < c->n; ++k) free(c->s[k].phi);
+  free(c->s);
+  memset(c, 0, sizeof *c);
+}
+
+/* Runs a stack; returns the status, the sink holds the slices. */
+typedef struct run {
+  source_ctx src;
+  sink_ctx sink;
+  lsm_pair_stats stats[8];
+  lsm_err err;
+} run;
+
+static lsm_status run_stack(run *r, int w, int h, int outline, const slice_def *defs,
+                            const double *z, size_t count, const lsm_stack_opts *opts) {
+  memset(r, 0, sizeof *r);
+  r->src.width = w;
+  r->src.height = h;
+  r->src.outline = outline;
+  r->src.defs = defs;
+  r->src.count = count;
+  r->sink.width = w;
+  r->sink.height = h;
+  lsm_err_clear(&r->err);
+  lsm_slice_source source = {&r->src, count, z, src_load, src_name};
+  lsm_slice_sink sink = {&r->sink, sink_emit};
+  return lsm_stack_run(&source, w, h, opts, &sink, r->stats, NULL, &r->err);
+}
+
+/* ------------------------------------------------------------------------ */
+/* measurements on an output slice (inside: phi <= 0, as the CLI writes)     */
+
+static size_t area(const float *phi, int w, int h) {
+  size_t n = 0;
+  for (int k = 0; k < w * h; ++k) n += phi[k] <= 0.0f;
+  return n;
+}
+
+/* Connected components of the pixels with (phi <= 0) == fg, 8- or
+ * 4-connected.  With skip_border, components touching the image border are
+ * not counted.  Per component, centroid sums go to cx/cy if given (up to 8). */
+static int components(const float *phi, int w, int h, int fg, int conn8, int skip_border,
+                      double *cx, double *cy) {
+  int *label = calloc((size_t)w * h, sizeof *label);
+  int *stack = malloc((size_t)w * h * sizeof *stack);
+  assert_non_null(label);
+  assert_non_null(stack);
+  int count = 0;
+  for (int start = 0; start < w * h; ++start) {
+    if (label[start] || (phi[start] <= 0.0f) != fg) continue;
+    int top = 0, touches = 0;
+    size_t npx = 0;
+    double sx = 0, sy = 0;
+    stack[top++] = start;
+    label[start] = -1;
+    while (top) {
+      const int p = stack[--top], x = p % w, y = p / w;
+      npx++;
+      sx += x;
+      sy += y;
+      if (x == 0 || y == 0 || x == w - 1 || y == h - 1) touches = 1;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (!dx && !dy) continue;
+          if (!conn8 && dx && dy) continue;
+          const int xx = x + dx, yy = y + dy;
+          if (xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
+          const int q = yy * w + xx;
+          if (label[q] || (phi[q] <= 0.0f) != fg) continue;
+          label[q] = -1;
+          stack[top++] = q;
+        }
+    }
+    if (skip_border && touches) continue;
+    if (cx && count < 8) cx[count] = sx / npx, cy[count] = sy / npx;
+    count++;
+  }
+  free(label);
+  free(stack);
+  return count;
+}
+
+static int fg_components(const float *phi, int w, int h) {
+  return components(phi, w, h, 1, 1, 0, NULL, NULL);
+}
+
+/* Holes: 4-connected background components that do not touch the border. */
+static int holes(const float *phi, int w, int h) { return components(phi, w, h, 0, 0, 1, NULL, NULL); }
+
+static void check_exact_input(const run *r, size_t out_index, size_t input_index) {
+  const out_slice *o = &r->sink.s[out_index];
+  assert_int_equal(o->input_index, (long)input_index);
+  float *want = input_phi(&r->src, input_index);
+  const int n = r->src.width * r->src.height;
+  for (int k = 0; k < n; ++k)
+    if (o->phi[k] != want[k])
+      fail_msg("output slice %zu (z = %g) differs from input %zu at pixel %d: %.9g vs %.9g",
+               out_index, o->z, input_index, k, o->phi[k], want[k]);
+  free(want);
+}
+
+static void default_opts(lsm_stack_opts *o) {
+  lsm_stack_opts_default(o);
+  o->morph.threads = 2;
+}
+
+/* ------------------------------------------------------------------------ */
+/* concentric discs: a cone                                                   */
+
+#define W 101
+#define H 101
+#define C 50.0 /* image centre */
+
+static void check_cone(const run *r, const double *z_in, size_t n_in, double tol) {
+  assert_int_equal(r->sink.n, 21);
+  size_t next_input = 0;
+  for (size_t k = 0; k < r->sink.n; ++k) {
+    const out_slice *o = &r->sink.s[k];
+    assert_close(o->z, (double)k, 1e-9);
+    if (next_input < n_in && fabs(z_in[next_input] - o->z) < 1e-9) {
+      check_exact_input(r, k, next_input++);
+    } else {
+      assert_int_equal(o->input_index, -1);
+    }
+    /* Radius from the area; the cone is r = 30 - z. */
+    const double rad = sqrt((double)area(o->phi, W, H) / PI);
+    if (fabs(rad - (30.0 - o->z)) > tol)
+      fail_msg("slice z = %g: radius %.3f, expected %.3f +- %g", o->z, rad, 30.0 - o->z, tol);
+    assert_int_equal(fg_components(o->phi, W, H), 1);
+    assert_int_equal(holes(o->phi, W, H), 0);
+  }
+  assert_int_equal(next_input, n_in);
+}
+
+static void test_cone_default(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(C, C, 30)}}, {1, {disc(C, C, 10)}}};
+  const double z[2] = {0, 20};
+  lsm_stack_opts o;
+  default_opts(&o);
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+  check_cone(&r, z, 2, 0.5);
+  /* One gap, 19 intermediate slices. */
+  assert_int_equal(r.stats[0].source, 0);
+  assert_int_equal(r.stats[0].target, 1);
+  assert_int_equal(r.stats[0].slices, 19);
+  assert_true(r.stats[0].iterations > 0);
+  assert_true(r.stats[0].dt > 0);
+  assert_int_equal(r.stats[0].hit_max_iter, 0);
+  /* Printed for the report: the largest radius error. */
+  double worst = 0;
+  for (size_t k = 0; k < r.sink.n; ++k)
+    worst = fmax(worst, fabs(sqrt(area(r.sink.s[k].phi, W, H) / PI) - (30.0 - r.sink.s[k].z)));
+  print_message("cone ls: worst radius error %.3f px\n", worst);
+  sink_free(&r.sink);
+}
+
+/* Heights 0, 5, 20 with discs of radius 30, 25, 10: still r = 30 - z. */
+static void test_cone_nonuniform(void **state) {
+  (void)state;
+  const slice_def defs[3] = {{1, {disc(C, C, 30)}}, {1, {disc(C, C, 25)}}, {1, {disc(C, C, 10)}}};
+  const double z[3] = {0, 5, 20};
+  lsm_stack_opts o;
+  default_opts(&o);
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 3, &o), LSM_OK);
+  check_cone(&r, z, 3, 0.5);
+  assert_int_equal(r.sink.s[5].input_index, 1);
+  assert_int_equal(r.stats[0].slices, 4);
+  assert_int_equal(r.stats[1].slices, 14);
+  sink_free(&r.sink);
+}
+
+/* Blend: (1 - s)(d - 30) + s (d - 10) = d - (30 - 20 s) exactly for circle
+ * distances, so the cone is reproduced too, and the endpoints exactly. */
+static void test_cone_blend(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(C, C, 30)}}, {1, {disc(C, C, 10)}}};
+  const double z[2] = {0, 20};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.method = LSM_METHOD_BLEND;
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+  check_cone(&r, z, 2, 0.5);
+  assert_int_equal(r.stats[0].iterations, 0);
+  sink_free(&r.sink);
+}
+
+/* dz = 4 on heights 0..20: z = 0, 4, ..., 20; dz = 3: 0, 3, ..., 18 (the last
+ * input, 20, is off the grid and not emitted). */
+static void test_output_heights(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(C, C, 30)}}, {1, {disc(C, C, 10)}}};
+  const double z[2] = {0, 20};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.method = LSM_METHOD_BLEND;
+  o.dz = 4;
+  run r;
+  assert_int_equal(lsm_stack_output_count(z, 2, 4.0), 6);
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 6);
+  for (size_t k = 0; k < 6; ++k) assert_close(r.sink.s[k].z, 4.0 * k, 1e-9);
+  check_exact_input(&r, 0, 0);
+  check_exact_input(&r, 5, 1);
+  sink_free(&r.sink);
+  o.dz = 3;
+  assert_int_equal(lsm_stack_output_count(z, 2, 3.0), 7);
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 7);
+  for (size_t k = 0; k < 7; ++k) {
+    assert_close(r.sink.s[k].z, 3.0 * k, 1e-9);
+    if (k) assert_int_equal(r.sink.s[k].input_index, -1);
+  }
+  check_exact_input(&r, 0, 0);
+  sink_free(&r.sink);
+}
+
+/* ------------------------------------------------------------------------ */
+/* topology                                                                  */
+
+/* Component counts of the intermediate slices, printed as a string. */
+static void counts(const run *r, int *c, char *text) {
+  text[0] = '\0';
+  for (size_t k = 0; k < r->sink.n; ++k) {
+    c[k] = fg_components(r->sink.s[k].phi, W, H);
+    sprintf(text + strlen(text), "%d", c[k]);
+  }
+}
+
+/* Two discs merge into one.  A: discs r = 6 at x = 32, 68 (a 24 px gap: the
+ * neck point (50, 50) is 12 px outside A); B: one disc r = 25 at the centre,
+ * covering both (the neck is 25 px deep inside it).  While phi relaxes like
+ * a distance function, phi(s) at the neck ~ (1 - s) 12 + s (-25) (exact for
+ * the blend), so the neck closes near s = 12/37 = 0.32: at z = 1 (s = 0.1)
+ * there are 2 components (phi ~ +8 there), at z = 9 one (phi ~ -21).  The
+ * count never goes back up.  Split is the same pair in reverse order. */
+static void test_merge_split(void **state) {
+  (void)state;
+  const slice_def two = {2, {disc(32, C, 6), disc(68, C, 6)}};
+  const slice_def one = {1, {disc(C, C, 25)}};
+  const double z[2] = {0, 10};
+  int c[16];
+  char text[32];
+  for (int method = 0; method < 2; ++method) {
+    lsm_stack_opts o;
+    default_opts(&o);
+    o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+    const slice_def merge[2] = {two, one}, split[2] = {one, two};
+    run r;
+    assert_int_equal(run_stack(&r, W, H, 0, merge, z, 2, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 11);
+    counts(&r, c, text);
+    print_message("merge (%s): components %s\n", lsm_method_name(o.method), text);
+    assert_int_equal(c[0], 2);
+    assert_int_equal(c[1], 2);
+    assert_int_equal(c[9], 1);
+    assert_int_equal(c[10], 1);
+    for (int k = 1; k <= 10; ++k) {
+      assert_true(c[k] == 1 || c[k] == 2);
+      assert_true(c[k] <= c[k - 1]);
+    }
+    /* The area grows monotonically from two small discs to the big one. */
+    for (int k = 1; k <= 10; ++k)
+      assert_true(area(r.sink.s[k].phi, W, H) >= area(r.sink.s[k - 1].phi, W, H));
+    sink_free(&r.sink);
+
+    assert_int_equal(run_stack(&r, W, H, 0, split, z, 2, &o), LSM_OK);
+    counts(&r, c, text);
+    print_message("split (%s): components %s\n", lsm_method_name(o.method), text);
+    assert_int_equal(c[0], 1);
+    assert_int_equal(c[1], 1);
+    assert_int_equal(c[9], 2);
+    assert_int_equal(c[10], 2);
+    for (int k = 1; k <= 10; ++k) {
+      assert_true(c[k] == 1 || c[k] == 2);
+      assert_true(c[k] >= c[k - 1]);
+    }
+    for (int k = 1; k <= 10; ++k)
+      assert_true(area(r.sink.s[k].phi, W, H) <= area(r.sink.s[k - 1].phi, W, H));
+    sink_free(&r.sink);
+  }
+}
+
+/* A disc next to an empty slice: the object closes by mid-gap.  Vanishing
+ * (disc at z = 0, empty at z = 10): areas strictly decrease while non-empty,
+ * the last non-empty slice is at z <= 5, and the disc is still there just
+ * after the input (z = 1).  Appearing (the reverse): the mirror image. */
+static void test_vanish_appear(void **state) {
+  (void)state;
+  const slice_def full = {1, {disc(C, C, 15)}}, none = {0, {{0}}};
+  const double z[2] = {0, 10};
+  for (int variant = 0; variant < 4; ++variant) {
+    lsm_stack_opts o;
+    default_opts(&o);
+    o.method = variant & 1 ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+    if (variant & 2) o.interp = LSM_INTERP_LINEAR;
+    const slice_def vanish[2] = {full, none}, appear[2] = {none, full};
+    run r;
+    size_t a[11];
+    assert_int_equal(run_stack(&r, W, H, 0, vanish, z, 2, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 11);
+    check_exact_input(&r, 0, 0);
+    int last = -1;
+    for (int k = 0; k <= 10; ++k) {
+      a[k] = area(r.sink.s[k].phi, W, H);
+      if (a[k]) last = k;
+    }
+    print_message("vanish (%s, %s): areas %zu %zu %zu %zu %zu %zu ...\n",
+                  lsm_method_name(o.method), lsm_interp_name(o.interp), a[0], a[1], a[2], a[3],
+                  a[4], a[5]);
+    assert_true(last >= 1 && last <= 5);
+    for (int k = 1; k <= last; ++k) assert_true(a[k] < a[k - 1]);
+    for (int k = last + 1; k <= 10; ++k) assert_int_equal(a[k], 0);
+    /* The empty input slice: everything outside. */
+    assert_int_equal(r.sink.s[10].input_index, 1);
+    for (int p = 0; p < W * H; ++p) assert_true(r.sink.s[10].phi[p] > 0.0f);
+    /* What remains stays one disc around the centre. */
+    for (int k = 1; k <= last; ++k) assert_int_equal(fg_components(r.sink.s[k].phi, W, H), 1);
+    sink_free(&r.sink);
+
+    assert_int_equal(run_stack(&r, W, H, 0, appear, z, 2, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 11);
+    check_exact_input(&r, 10, 1);
+    int first = 11;
+    for (int k = 10; k >= 0; --k) {
+      a[k] = area(r.sink.s[k].phi, W, H);
+      if (a[k]) first = k;
+    }
+    print_message("appear (%s, %s): first non-empty z = %d\n", lsm_method_name(o.method),
+                  lsm_interp_name(o.interp), first);
+    assert_true(first >= 5 && first <= 9);
+    for (int k = first + 1; k <= 10; ++k) assert_true(a[k] > a[k - 1]);
+    for (int k = 0; k < first; ++k) assert_int_equal(a[k], 0);
+    sink_free(&r.sink);
+  }
+}
+
+/* ------------------------------------------------------------------------ */
+/* alignment                                                                 */
+
+/* Disc r = 10 at (25, 50) at z = 0 and the same disc at (75, 50) at z = 7.
+ * align hull: both are moved to the centre (identical there: no motion), and
+ * slice z is moved back by the linear interpolation of the two shifts, so it is
+ * one disc centred at (25 + 50 z / 7, 50) (fractional shifts: bilinear).
+ * align none: the discs do not overlap, so nothing travels: the left disc
+ * erodes in place (its points are far outside the target) while the right one
+ * grows in place from nothing late in the gap; with the two-sided morph the
+ * object is absent in the middle of the gap (observed: components per slice
+ * 1 1 0 0 0 0 1 1 at z = 0..7; the blend's zero set of (1 - s) phi_A + s phi_B,
+ * whose minimum is 50 s - 10 at the left centre, is likewise empty for
+ * 0.2 < s < 0.8, i.e. z = 2..5).  That is
+ * what the level-set morph does without alignment, not a crash: only the
+ * exact endpoints and a clean run are asserted. */
+static void test_align(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(25, C, 10)}}, {1, {disc(75, C, 10)}}};
+  const double z[2] = {0, 7};
+  lsm_stack_opts o;
+  run r;
+  /* hull, and auto (which must choose hull here: moving A onto B's centroid
+   * takes the overlap from 0 to the whole disc). */
+  for (int mode = 0; mode < 2; ++mode) {
+    default_opts(&o);
+    o.align = mode ? LSM_ALIGN_AUTO : LSM_ALIGN_HULL;
+    assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 8);
+    check_exact_input(&r, 0, 0);
+    check_exact_input(&r, 7, 1);
+    const size_t a0 = area(r.sink.s[0].phi, W, H);
+    double worst = 0;
+    for (size_t k = 1; k < 7; ++k) {
+      double cx[8], cy[8];
+      const float *phi = r.sink.s[k].phi;
+      assert_int_equal(components(phi, W, H, 1, 1, 0, cx, cy), 1);
+      const double ex = 25.0 + 50.0 * k / 7.0, ey = C;
+      const double d = hypot(cx[0] - ex, cy[0] - ey);
+      worst = fmax(worst, d);
+      if (d > 1.5)
+        fail_msg("z = %zu: centroid (%.2f, %.2f), expected (%.2f, %.2f)", k, cx[0], cy[0], ex,
+                 ey);
+      /* Same disc: the area stays within a perimeter's worth of pixels. */
+      const double ak = (double)area(phi, W, H);
+      assert_true(fabs(ak - (double)a0) <= 2.0 * PI * 10.0);
+    }
+    print_message("align %s: worst centroid offset %.3f px\n", lsm_align_name(o.align), worst);
+    sink_free(&r.sink);
+  }
+
+  o.align = LSM_ALIGN_NONE;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 8);
+  check_exact_input(&r, 0, 0);
+  check_exact_input(&r, 7, 1);
+  char text[64] = "";
+  for (size_t k = 0; k < 8; ++k) {
+    double cx[8], cy[8];
+    const int n = components(r.sink.s[k].phi, W, H, 1, 1, 0, cx, cy);
+    sprintf(text + strlen(text), " %d", n);
+    for (int q = 0; q < n && q < 8; ++q) assert_true(isfinite(cx[q]) && isfinite(cy[q]));
+  }
+  print_message("align none: components per slice%s\n", text);
+  sink_free(&r.sink);
+}
+
+/* ------------------------------------------------------------------------ */
+/* outline input, nested contours                                            */
+
+static void check_one_hole(const run *r, const char *what) {
+  char text[64] = "";
+  for (size_t k = 0; k < r->sink.n; ++k) {
+    const float *phi = r->sink.s[k].phi;
+    const int nh = holes(phi, W, H), nc = fg_components(phi, W, H);
+    sprintf(text + strlen(text), " %d/%d", nc, nh);
+    if (nh != 1 || nc != 1)
+      fail_msg("%s: slice z = %g has %d components and %d holes (want 1 and 1)", what,
+               r->sink.s[k].z, nc, nh);
+  }
+  print_message("%s: components/holes%s\n", what, text);
+}
+
+static void test_outline_ring(void **state) {
+  (void)state;
+  /* Ring: outer r = 35.25, hole r = 15.5  ->  outer r = 30.25, hole r = 20.5. */
+  const slice_def defs[2] = {{2, {disc(C, C, 35.25), disc_hole(C, C, 15.5)}},
+                             {2, {disc(C, C, 30.25), disc_hole(C, C, 20.5)}}};
+  const double z[2] = {0, 10};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.input = LSM_INPUT_OUTLINE;
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 1, defs, z, 2, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 11);
+  check_exact_input(&r, 0, 0);
+  check_exact_input(&r, 10, 1);
+  check_one_hole(&r, "ring");
+  /* The hole radius grows from ~15.5 to ~20.5 monotonically (hole area). */
+  size_t prev = 0;
+  for (size_t k = 0; k < r.sink.n; ++k) {
+    const float *phi = r.sink.s[k].phi;
+    size_t hole_px = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x)
+        if (hypot(x - C, y - C) < 25.0 && phi[y * W + x] > 0.0f) hole_px++;
+    assert_true(hole_px >= prev);
+    prev = hole_px;
+  }
+  sink_free(&r.sink);
+}
+
+/* The vase: circle (r = 40.25) with a 21 x 21 square hole -> 81 x 81 square
+ * with a circular hole (r = 11.5) -> back. */
+static void test_outline_vase(void **state) {
+  (void)state;
+  const slice_def a = {2, {disc(C, C, 40.25), rect(40, 40, 60, 60, 1)}};
+  const slice_def b = {2, {rect(10, 10, 90, 90, 0), disc_hole(C, C, 11.5)}};
+  const slice_def defs[3] = {a, b, a};
+  const double z[3] = {0, 8, 16};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.input = LSM_INPUT_OUTLINE;
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 1, defs, z, 3, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 17);
+  check_exact_input(&r, 0, 0);
+  check_exact_input(&r, 8, 1);
+  check_exact_input(&r, 16, 2);
+  check_one_hole(&r, "vase");
+  /* Symmetric stack: slice z and 16 - z are the same shape (the two gaps are
+   * mirror images), up to the solver being deterministic. */
+  for (size_t k = 1; k < 8; ++k)
+    assert_memory_equal(r.sink.s[k].phi, r.sink.s[16 - k].phi, sizeof(float) * W * H);
+  sink_free(&r.sink);
+}
+
+/* ------------------------------------------------------------------------ */
+/* per-iteration mode                                                        */
+
+static void test_per_iteration(void **state) {
+  (void)state;
+  const slice_def defs[3] = {{1, {disc(C, C, 30)}}, {1, {disc(C, C, 22)}}, {1, {disc(C, C, 14)}}};
+  const double z[3] = {0, 10, 30};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.per_iteration = 1;
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 3, &o), LSM_OK);
+  const size_t iters = (size_t)r.stats[0].iterations + (size_t)r.stats[1].iterations;
+  print_message("per-iteration: %d + %d iterations, %zu slices\n", r.stats[0].iterations,
+                r.stats[1].iterations, r.sink.n);
+  assert_true(r.stats[0].iterations > 0 && r.stats[1].iterations > 0);
+  assert_int_equal(r.sink.n, iters + 3);
+  assert_int_equal(r.stats[0].slices, (size_t)r.stats[0].iterations);
+  for (int p = 0; p < 2; ++p) {
+    assert_true(r.stats[p].cp <= o.tol);
+    assert_int_equal(r.stats[p].hit_max_iter, 0);
+  }
+  for (size_t k = 1; k < r.sink.n; ++k) assert_true(r.sink.s[k].z > r.sink.s[k - 1].z);
+  assert_close(r.sink.s[0].z, 0.0, 0.0);
+  assert_close(r.sink.s[r.sink.n - 1].z, 30.0, 1e-9);
+  /* Inputs: first, after pair 0's iterations, last; all exact. */
+  check_exact_input(&r, 0, 0);
+  const size_t i1 = (size_t)r.stats[0].iterations + 1;
+  assert_close(r.sink.s[i1].z, 10.0, 1e-9);
+  check_exact_input(&r, i1, 1);
+  check_exact_input(&r, r.sink.n - 1, 2);
+  size_t inputs = 0;
+  for (size_t k = 0; k < r.sink.n; ++k) inputs += r.sink.s[k].input_index >= 0;
+  assert_int_equal(inputs, 3);
+  /* Heights within a pair: linspace(z_A, z_B, k + 2). */
+  const int k0 = r.stats[0].iterations;
+  for (int n = 1; n <= k0; ++n) assert_close(r.sink.s[n].z, 10.0 * n / (k0 + 1), 1e-9);
+  /* The area decreases monotonically (each iterate shrinks the disc). */
+  for (size_t k = 1; k < r.sink.n; ++k)
+    assert_true(area(r.sink.s[k].phi, W, H) <= area(r.sink.s[k - 1].phi, W, H));
+  sink_free(&r.sink);
+}
+
+/* ------------------------------------------------------------------------ */
+/* errors                                                                    */
+
+static void test_errors(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(C, C, 10)}}, {1, {disc(C, C, 12)}}};
+  lsm_stack_opts o;
+  default_opts(&o);
+  run r;
+  const double z1[1] = {0};
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z1, 1, &o), LSM_ERR_INPUT);
+  assert_true(strlen(r.err.msg) > 0);
+  assert_int_equal(r.sink.n, 0);
+  const double zbad[2] = {5, 5};
+  assert_int_equal(run_stack(&r, W, H, 0, defs, zbad, 2, &o), LSM_ERR_INPUT);
+  assert_int_equal(r.sink.n, 0);
+  const double zdown[2] = {5, 1};
+  assert_int_equal(run_stack(&r, W, H, 0, defs, zdown, 2, &o), LSM_ERR_INPUT);
+  /* A slice of another size. */
+  const double z[2] = {0, 4};
+  lsm_slice_source source;
+  memset(&r, 0, sizeof r);
+  r.src.width = W;
+  r.src.height = H;
+  r.src.defs = defs;
+  r.sink.width = W;
+  r.sink.height = H;
+  source.ctx = &r.src;
+  source.count = 2;
+  source.z = z;
+  source.load = src_load;
+  source.name = src_name;
+  lsm_slice_sink sink = {&r.sink, sink_emit};
+  lsm_err_clear(&r.err);
+  assert_int_equal(lsm_stack_run(&source, W + 1, H, &o, &sink, r.stats, NULL, &r.err),
+                   LSM_ERR_INPUT);
+  sink_free(&r.sink);
+  /* Blend in per-iteration mode is a usage error. */
+  o.per_iteration = 1;
+  o.method = LSM_METHOD_BLEND;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_ERR_USAGE);
+  sink_free(&r.sink);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_cone_default),
+      cmocka_unit_test(test_cone_nonuniform),
+      cmocka_unit_test(test_cone_blend),
+      cmocka_unit_test(test_output_heights),
+      cmocka_unit_test(test_merge_split),
+      cmocka_unit_test(test_vanish_appear),
+      cmocka_unit_test(test_align),
+      cmocka_unit_test(test_outline_ring),
+      cmocka_unit_test(test_outline_vase),
+      cmocka_unit_test(test_per_iteration),
+      cmocka_unit_test(test_errors),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
