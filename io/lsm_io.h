@@ -38,8 +38,19 @@ typedef struct lsm_png_read_opts {
 lsm_status lsm_png_read_mask(const char *path, const lsm_png_read_opts *opts,
                              lsm_mask *out, lsm_err *err);
 
+/* The same from an open stream positioned at the PNG signature (a file, a pipe,
+ * or fmemopen() memory: the fuzzer uses that); name is used in messages.  The
+ * stream is read but not closed. */
+lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+                                    lsm_mask *out, lsm_err *err);
+
 /* Reads only the header: width and height. */
 lsm_status lsm_png_read_size(const char *path, int *width, int *height, lsm_err *err);
+/* The same, refusing (LSM_ERR_LIMIT) an image of more than max_pixels pixels
+ * (0 = no limit) as soon as the IHDR chunk is read, before the rest of the
+ * header: a 200000 x 200000 header alone is refused with the limit message. */
+lsm_status lsm_png_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
+                               lsm_err *err);
 
 /* Writes an 8-bit grayscale PNG; pixels are width*height bytes, row-major. */
 lsm_status lsm_png_write_gray8(const char *path, const uint8_t *pixels, int width,
@@ -99,6 +110,10 @@ void lsm_nrrd_abort(lsm_nrrd_writer **w);
 
 /* ---- small helpers ----------------------------------------------------------- */
 
+/* Atomically exchanges two existing paths (Linux renameat2 RENAME_EXCHANGE):
+ * 0, or -1 with errno (ENOSYS or EINVAL where the system or file system
+ * cannot, and the caller must fall back to two renames). */
+int lsm_rename_exchange(const char *a, const char *b);
 /* mkdir -p for one level; ok if it already exists as a folder. */
 lsm_status lsm_make_dir(const char *path, lsm_err *err);
 /* Reads a whole file into a malloc'd buffer (NUL-terminated); refuses files

@@ -1,0 +1,36 @@
+/* io_mha: the MetaImage header of volume.mha (one file, ElementDataFile = LOCAL,
+ * the samples follow the header directly).
+ *
+ * The slice count and z spacing are unknown until the last slice (per-iteration
+ * mode), so they are printed in fixed-width, right-aligned fields ("%20zu",
+ * "%24.17g": MetaIO reads numbers with >>, which skips the leading blanks); the
+ * header length is then independent of them and lsm_volume_writer rewrites it
+ * in place at the end.  Offset is the centre of the first sample, as ITK and
+ * VTK expect; the direction matrix is the identity.
+ */
+#include "lsm_io.h"
+
+#include <stdio.h>
+
+size_t lsm_mha_header(char *out, size_t cap, const lsm_volume_info *info) {
+  if (!out || !info || cap == 0) return 0;
+  const char *type = info->values == LSM_VALUES_MASK ? "MET_UCHAR" : "MET_FLOAT";
+  int len = snprintf(out, cap,
+                     "ObjectType = Image\n"
+                     "NDims = 3\n"
+                     "BinaryData = True\n"
+                     "BinaryDataByteOrderMSB = False\n"
+                     "CompressedData = False\n"
+                     "TransformMatrix = 1 0 0 0 1 0 0 0 1\n"
+                     "Offset = %.17g %.17g %.17g\n"
+                     "CenterOfRotation = 0 0 0\n"
+                     "ElementSpacing = %.17g %.17g %24.17g\n"
+                     "DimSize = %d %d %20zu\n"
+                     "ElementNumberOfChannels = 1\n"
+                     "ElementType = %s\n"
+                     "ElementDataFile = LOCAL\n",
+                     info->ox, info->oy, info->oz, info->sx, info->sy, info->sz, info->nx,
+                     info->ny, info->nz, type);
+  if (len < 0 || (size_t)len >= cap) return 0;
+  return (size_t)len;
+}

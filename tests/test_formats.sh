@@ -1,0 +1,137 @@
+#!/bin/sh
+# Output formats of lsmorph, checked with real readers:
+#   sh tests/test_formats.sh BUILD_DIR
+# A ball of radius 40 px (128 x 128 x 105 slices) is cut into slices, every 8th
+# is kept and reconstructed with --format nrrd,mha,vtk,exr,raw --mesh; then
+# (tests/formats_check.py, run with Debian's /usr/bin/python3):
+#   - VTK opens volume.nrrd, volume.mha and volume.vtk with the same values as
+#     volume.raw (+ volume.json) and the right dimensions, spacing and origin
+#   - OpenImageIO (oiiotool, iinfo) reads every exr/NNNNN.exr with the same
+#     values, one channel, pixelSize and sliceHeight attributes
+#   - VTK's flying edges at 0 encloses the ball's volume within 4 %
+#   - surface.ply: no open or non-manifold edges (vtkFeatureEdges), volume
+#     (vtkMassProperties) within 1 % of the isosurface's, outward winding and
+#     normals
+#   - preview.png and preview3d.png are pictures
+# A second run checks --values mask with anisotropic physical spacing, and a
+# few bad options must fail cleanly.  Prints "formats: N passed, N failed".
+set -u
+BUILD=${1:-build}
+LSM="$BUILD/lsmorph"
+PY=/usr/bin/python3
+HELPER="$(dirname "$0")/formats_check.py"
+pass=0
+fail=0
+
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "formats: FAIL: $*"; }
+check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
+  desc=$1
+  shift
+  if "$@"; then ok; else bad "$desc"; fi
+}
+finish() {
+  echo "formats: $pass passed, $fail failed"
+  [ "$fail" -eq 0 ]
+  exit
+}
+# run_checks LOG COMMAND...: runs a formats_check.py check, counts its lines.
+run_checks() {
+  log=$1
+  shift
+  "$@" >"$log" 2>&1
+  rc=$?
+  grep '^FAIL - ' "$log" | sed 's/^FAIL - /formats: FAIL: /'
+  p=$(grep -c '^ok - ' "$log")
+  f=$(grep -c '^FAIL - ' "$log")
+  pass=$((pass + p))
+  fail=$((fail + f))
+  if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then
+    bad "formats_check.py exited with $rc:"
+    tail -5 "$log"
+  fi
+}
+
+[ -x "$LSM" ] || { bad "$LSM is missing (run make first)"; finish; }
+[ -x "$PY" ] || { bad "$PY is missing (Debian package python3)"; finish; }
+"$PY" -c 'import vtk, numpy' 2>/dev/null || { bad "$PY cannot import vtk and numpy (Debian packages python3-vtk9, python3-numpy)"; finish; }
+command -v oiiotool >/dev/null 2>&1 && command -v iinfo >/dev/null 2>&1 ||
+  { bad "oiiotool / iinfo are missing (Debian package openimageio-tools)"; finish; }
+
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-formats.XXXXXX") || exit 1
+trap 'rm -rf "$TMP"' EXIT
+trap 'exit 1' INT TERM
+
+# ---- the ball, every 8th slice, every format, the mesh -------------------------------------
+R=40
+CX=63.3
+CY=64.6
+CZ=52.4
+check "ball slices written" "$PY" "$HELPER" ball "$TMP/ball" 128 105 8 $R $CX $CY $CZ
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/out" --spacing 8 --format nrrd,mha,vtk,exr,raw --mesh -q \
+  >"$TMP/log" 2>&1
+rc=$?
+check "reconstruct --format nrrd,mha,vtk,exr,raw --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+if [ $rc -eq 0 ]; then
+  check "nothing printed with -q" [ ! -s "$TMP/log" ]
+  run_checks "$TMP/check1" "$PY" "$HELPER" check "$TMP/out" --spacing 1 1 1 --values sdf \
+    --ball $R $CX $CY $CZ
+  grep -E 'error|volume' "$TMP/check1" | grep -E 'encloses|mesh volume' | sed 's/^ok - /formats: /'
+  # headers were fixed in place: same layout as a header written for the final count
+  check "volume.mha header says DimSize 128 128 105" grep -a -q '^DimSize = 128 128  *105$' "$TMP/out/volume.mha"
+  check "volume.vtk header says DIMENSIONS 128 128 105" grep -a -q '^DIMENSIONS 128 128  *105$' "$TMP/out/volume.vtk"
+  check "surface.ply is binary little endian" grep -a -q '^format binary_little_endian 1.0' "$TMP/out/surface.ply"
+fi
+
+# ---- a mask volume with anisotropic physical spacing ---------------------------------------
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/mask" --spacing 4 --pixel-size 0.5 --dz 1 --values mask \
+  --format raw,exr,vtk,mha,nrrd --no-slices -q >"$TMP/log" 2>&1
+rc=$?
+check "reconstruct --values mask exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+if [ $rc -eq 0 ]; then
+  run_checks "$TMP/check2" "$PY" "$HELPER" check "$TMP/mask" --spacing 0.5 0.5 1 --values mask
+  check "--no-slices: no slices/ folder" [ ! -e "$TMP/mask/slices" ]
+fi
+
+# ---- per-iteration mode: slice count and z spacing known only at the end ---------------------
+# (a ball cut by the first and last slices, so no slice is empty; its heights
+# are not symmetric, so no two input slices are equal)
+check "per-iteration slices written" "$PY" "$HELPER" ball "$TMP/pi" 64 41 8 24 31.5 32.2 18.7
+"$LSM" reconstruct "$TMP/pi" -o "$TMP/piout" --spacing 8 --pixel-size 0.5 --per-iteration \
+  --format nrrd,mha,vtk,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+rc=$?
+check "reconstruct --per-iteration exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+if [ $rc -eq 0 ]; then
+  run_checks "$TMP/check3" "$PY" "$HELPER" check "$TMP/piout" --spacing 0.5 0.5 auto --values sdf --mesh
+fi
+
+# ---- defaults: volume.nrrd and the previews only; --no-preview ------------------------------
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/def" --spacing 8 --no-slices -q >/dev/null 2>&1
+check "default run exits 0" [ $? -eq 0 ]
+check "default run writes volume.nrrd" [ -f "$TMP/def/volume.nrrd" ]
+check "default run writes no other volume" sh -c '[ ! -e "$1/volume.mha" ] && [ ! -e "$1/volume.vtk" ] && [ ! -e "$1/volume.raw" ] && [ ! -e "$1/exr" ]' _ "$TMP/def"
+check "default run writes no mesh" [ ! -e "$TMP/def/surface.ply" ]
+check "default run writes preview.png and preview3d.png" sh -c '[ -f "$1/preview.png" ] && [ -f "$1/preview3d.png" ]' _ "$TMP/def"
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/nop" --spacing 8 --no-slices --no-preview -q >/dev/null 2>&1
+check "--no-preview run exits 0" [ $? -eq 0 ]
+check "--no-preview writes no pictures" sh -c '[ ! -e "$1/preview.png" ] && [ ! -e "$1/preview3d.png" ]' _ "$TMP/nop"
+
+# ---- bad options and unwritable places fail cleanly ------------------------------------------
+for args in "--format nrrd,tiff" "--format ," "--format" "--values float" "--mesh=1"; do
+  # shellcheck disable=SC2086
+  "$LSM" reconstruct "$TMP/ball" -o "$TMP/bad" $args >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "'$args' exits 2 (got $rc)" [ $rc -eq 2 ]
+  check "'$args' says lsmorph: error:" grep -q '^lsmorph: error: ' "$TMP/e"
+done
+check "usage errors leave no output" [ ! -e "$TMP/bad" ]
+"$LSM" reconstruct "$TMP/ball" -o /proc/lsm-no-such-place/out --format exr,raw --mesh -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "unwritable output exits 1 (got $rc)" [ $rc -eq 1 ]
+check "unwritable output says lsmorph: error:" grep -q '^lsmorph: error: ' "$TMP/e"
+help=$("$LSM" help reconstruct 2>&1)
+for opt in --format --values --mesh --no-preview; do
+  case $help in *"$opt"*) ok ;; *) bad "help reconstruct does not list $opt" ;; esac
+done
+
+finish
