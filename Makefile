@@ -7,9 +7,22 @@
 #   make validate   validation report (validation/report/REPORT.md)
 #
 # Options: WERROR=1 (warnings are errors; CI sets it), NATIVE=1 (-march=native),
-#          DEBUG=1 (-O0 -g).
+#          MPI=1 (Open MPI build into build-mpi/: mpirun -np N build-mpi/lsmorph ...),
+#          DEBUG=1 (-O0 -g), SANITIZE=1 (AddressSanitizer + UndefinedBehaviorSanitizer,
+#          built into build-san/ unless BUILD is given: make test SANITIZE=1).
+#   make fuzz       libFuzzer harnesses (clang) for the PNG reader, the heights parser
+#                   and the command line, FUZZ_SECONDS (default 60) each
 
 CC      ?= cc
+ifeq ($(SANITIZE),1)
+BUILD   ?= build-san
+endif
+# MPI=1: Open MPI build (mpicc) into build-mpi/, gaps spread over ranks by
+# `mpirun -np N build-mpi/lsmorph reconstruct ...`.
+ifeq ($(MPI),1)
+BUILD   ?= build-mpi
+CC      := mpicc
+endif
 BUILD   ?= build
 PREFIX  ?= /usr/local
 
@@ -24,11 +37,19 @@ endif
 ifeq ($(NATIVE),1)
 OPT     += -march=native
 endif
+# Sanitizers: -g for symbolised reports; UB aborts (a report must fail the test).
+ifeq ($(SANITIZE),1)
+OPT     += -g -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
+endif
 CFLAGS  ?=
 CFLAGS  += -std=c17 $(WARN) $(OPT) -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP
-LDLIBS  += -lpng -lz -lm -lOpenEXRCore -fopenmp
+ifeq ($(MPI),1)
+CFLAGS  += -DLSM_WITH_MPI
+endif
+LDLIBS  += -lpng -lz -lm -lOpenEXRCore -fopenmp -lOpenCL
 
-DEBIAN_PACKAGES := gcc make pkg-config libpng-dev zlib1g-dev libcmocka-dev python3 python3-numpy python3-matplotlib libopenexr-dev python3-vtk9 openimageio-tools
+DEBIAN_PACKAGES := gcc make pkg-config libpng-dev zlib1g-dev libcmocka-dev python3 python3-numpy python3-matplotlib libopenexr-dev python3-vtk9 openimageio-tools \
+                   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd libopenmpi-dev openmpi-bin
 DEPS_STAMP := $(BUILD)/.deps-ok
 
 LIB_SRC := $(wildcard solver/lsm_*.c) $(wildcard io/*.c) $(wildcard kernels/*.c)
@@ -40,8 +61,18 @@ EXAMPLE_SRC := $(wildcard examples/*.c)
 EXAMPLE_BIN := $(patsubst examples/%.c,$(BUILD)/examples/%,$(EXAMPLE_SRC))
 VALIDATION_SRC := $(wildcard validation/*.c)
 VALIDATION_BIN := $(patsubst validation/%.c,$(BUILD)/validation/%,$(VALIDATION_SRC))
+FUZZ_NAMES := png heights cli
+REPLAY_BIN := $(patsubst %,$(BUILD)/fuzz-replay/replay_%,$(FUZZ_NAMES))
+FUZZ_CC ?= clang
+FUZZ_PACKAGES := clang libclang-rt-14-dev libomp-dev
+FUZZ_DEPS_STAMP := $(BUILD)/.fuzz-deps-ok
+FUZZ_SECONDS ?= 60
+FUZZ_CFLAGS := -std=c17 -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
+               -fno-sanitize-recover=undefined -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP
+FUZZ_OBJ := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(LIB_SRC))
+FUZZ_BIN := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
 
-.PHONY: all deps demo test bench validate install clean
+.PHONY: all deps demo test bench validate install clean fuzz fuzz-build
 all: $(BUILD)/lsmorph $(EXAMPLE_BIN)
 
 # Install missing Debian packages once per build folder (apt-get; sudo when not root).
@@ -53,6 +84,23 @@ $(DEPS_STAMP):
 $(BUILD)/obj/%.o: %.c | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) -c $< -o $@
+
+# OpenCL kernels embedded in the binary: kernels/morph.cl with kernels/lsm_cell.h
+# spliced in at its #include, as a C byte array (a string literal would pass
+# -Wpedantic's 4095-character limit), NUL-terminated.
+KERNEL_GEN := $(BUILD)/gen/lsm_kernels.h
+$(KERNEL_GEN): kernels/morph.cl kernels/lsm_cell.h
+	@mkdir -p $(dir $@)
+	@{ echo '/* Generated from kernels/morph.cl + kernels/lsm_cell.h by the Makefile: do not edit. */'; \
+	  echo 'static const unsigned char lsm_kernel_source[] = {'; \
+	  awk '/^#include "lsm_cell.h"/ { print "#line 1 \"lsm_cell.h\""; \
+	         while ((getline l < "kernels/lsm_cell.h") > 0) print l; \
+	         print "#line " (NR + 1) " \"morph.cl\""; next } { print }' kernels/morph.cl \
+	    | od -An -v -tx1 | sed 's/^ *//; s/ *$$//; s/  */,0x/g; s/^/0x/; s/$$/,/'; \
+	  echo '0x00};'; } > $@.tmp && mv $@.tmp $@
+$(BUILD)/obj/kernels/lsm_backend_cl.o $(BUILD)/fuzz/obj/kernels/lsm_backend_cl.o: $(KERNEL_GEN)
+$(BUILD)/obj/kernels/lsm_backend_cl.o: CFLAGS += -I$(BUILD)/gen
+$(BUILD)/fuzz/obj/kernels/lsm_backend_cl.o: FUZZ_CFLAGS += -I$(BUILD)/gen
 
 $(BUILD)/liblsmorph.a: $(LIB_OBJ)
 	@rm -f $@
@@ -76,10 +124,37 @@ $(BUILD)/tests/%: tests/%.c tests/lsm_test.h $(BUILD)/liblsmorph.a
 demo: all
 	@sh examples/demo.sh $(BUILD)
 
-test: all $(TEST_BIN)
+test: all $(TEST_BIN) $(REPLAY_BIN)
 	@sh tests/run-tests.sh $(BUILD)
 
-bench: all $(BUILD)/bench/bench_scheme
+# Fuzz harnesses replayed on their corpora (tests/test_fuzz_corpus.sh), built
+# with $(CC) and a small main() so make test needs no clang.
+$(BUILD)/fuzz-replay/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c $(BUILD)/liblsmorph.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) tests/fuzz/replay.c $< $(BUILD)/liblsmorph.a -o $@ $(LDLIBS)
+
+# libFuzzer: the library and each harness built with clang, ASan and UBSan into
+# $(BUILD)/fuzz/; each harness then runs FUZZ_SECONDS on a copy of its seed corpus.
+fuzz-build: $(FUZZ_BIN)
+fuzz: $(FUZZ_BIN)
+	@sh tests/fuzz/run.sh $(BUILD) $(FUZZ_SECONDS) $(FUZZ_NAMES)
+
+$(FUZZ_DEPS_STAMP): | $(DEPS_STAMP)
+	@sh tests/install-deps.sh $(FUZZ_PACKAGES)
+	@touch $@
+
+$(BUILD)/fuzz/obj/%.o: %.c | $(FUZZ_DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer-no-link -c $< -o $@
+
+$(BUILD)/fuzz/liblsmorph.a: $(FUZZ_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(BUILD)/fuzz/fuzz_%: tests/fuzz/fuzz_%.c $(BUILD)/fuzz/liblsmorph.a
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer $< $(BUILD)/fuzz/liblsmorph.a -o $@ $(LDLIBS)
+
+bench: all $(BUILD)/bench/bench_scheme $(BUILD)/bench/bench_opencl
 	@sh tests/bench.sh $(BUILD)
 
 $(BUILD)/bench/%: tests/%.c $(BUILD)/liblsmorph.a
@@ -97,3 +172,4 @@ clean:
 	rm -rf $(BUILD)
 
 -include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILD)/fuzz/obj -name '*.d' 2>/dev/null)

@@ -1,9 +1,14 @@
 /* io_dir: natural-order listing of the PNG files of a folder, and small file
- * helpers (mkdir of one level, whole-file read with a size limit). */
+ * helpers (mkdir of one level, whole-file read with a size limit, atomic
+ * exchange of two paths). */
+#if defined(__linux__) && !defined(_GNU_SOURCE)
+#define _GNU_SOURCE /* renameat2 (glibc >= 2.28) */
+#endif
 #include "lsm_io.h"
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -214,4 +219,15 @@ lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t
   *data = buf;
   if (length) *length = n;
   return LSM_OK;
+}
+
+int lsm_rename_exchange(const char *a, const char *b) {
+#if defined(__linux__) && defined(RENAME_EXCHANGE)
+  return renameat2(AT_FDCWD, a, AT_FDCWD, b, RENAME_EXCHANGE);
+#else
+  (void)a;
+  (void)b;
+  errno = ENOSYS;
+  return -1;
+#endif
 }

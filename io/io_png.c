@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <zlib.h>
 
 #define PNG_SIG_BYTES 8
 /* libpng's own default limit is 1,000,000 x 1,000,000; opts->max_pixels is
@@ -219,7 +220,7 @@ static int png_read_guarded(png_reader *r) {
   return 1;
 }
 
-static lsm_status png_read_common(const char *path, png_reader *r, lsm_err *err) {
+static void png_reader_init(png_reader *r) {
   png_io_init(&r->io);
   r->png = NULL;
   r->info = NULL;
@@ -228,7 +229,82 @@ static lsm_status png_read_common(const char *path, png_reader *r, lsm_err *err)
   r->rows = NULL;
   r->mask.width = r->mask.height = 0;
   r->mask.pixels = NULL;
+}
 
+/* The pixel limit applied straight from the IHDR chunk, before libpng reads
+ * any further: a header that declares a huge image followed by little or no
+ * data (or data that would take long to inflate) is refused at once with the
+ * limit message.  Only on seekable streams (files, fmemopen), with a complete
+ * IHDR whose CRC is right; everything else is left to libpng.  The stream is
+ * put back right after the signature.  Returns 0 when the image is over the
+ * limit (the message is in r->io). */
+static int ihdr_within_limit(png_reader *r) {
+  const uint64_t max_pixels = r->opts ? r->opts->max_pixels : 0;
+  if (max_pixels == 0) return 1;
+  FILE *fp = r->io.fp;
+  long start = ftell(fp);
+  if (start < 0) return 1;
+  png_byte c[25]; /* length, "IHDR", 13 bytes of data, CRC */
+  size_t got = fread(c, 1, sizeof c, fp);
+  int over = 0;
+  uint32_t w = 0, h = 0;
+  if (got == sizeof c && png_get_uint_32(c) == 13 && memcmp(c + 4, "IHDR", 4) == 0 &&
+      (uint32_t)crc32(0L, c + 4, 17) == png_get_uint_32(c + 21)) {
+    w = png_get_uint_32(c + 8);
+    h = png_get_uint_32(c + 12);
+    over = w > 0 && h > 0 && (uint64_t)w * (uint64_t)h > max_pixels; /* < 2^64 */
+  }
+  clearerr(fp);
+  if (fseek(fp, start, SEEK_SET) != 0) return 1; /* libpng reports what follows */
+  if (!over) return 1;
+  char text[160];
+  snprintf(text, sizeof text, "image is %" PRIu32 "x%" PRIu32 " = %" PRIu64
+           " pixels, more than the limit of %" PRIu64, w, h, (uint64_t)w * (uint64_t)h,
+           max_pixels);
+  png_io_set(&r->io, LSM_ERR_LIMIT, "", text);
+  return 0;
+}
+
+/* Reads from an open stream positioned at the signature; name is for messages.
+ * Does not close fp. */
+static lsm_status png_read_stream(FILE *fp, const char *name, png_reader *r, lsm_err *err) {
+  png_reader_init(r);
+  r->io.fp = fp;
+  lsm_status st = LSM_OK;
+  png_byte sig[PNG_SIG_BYTES];
+  size_t got = fread(sig, 1, sizeof sig, fp);
+  if (got != sizeof sig && ferror(fp)) {
+    st = lsm_fail(err, LSM_ERR_IO, name, "read error: %s", strerror(errno));
+  } else if (got == 0) {
+    st = lsm_fail(err, LSM_ERR_INPUT, name, "empty file, not a PNG file");
+  } else if (got != sizeof sig || png_sig_cmp(sig, 0, sizeof sig) != 0) {
+    st = lsm_fail(err, LSM_ERR_INPUT, name, "not a PNG file");
+  } else if (!ihdr_within_limit(r)) {
+    st = lsm_fail(err, r->io.status, name, "%s", r->io.msg);
+  } else {
+    r->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &r->io, on_png_error, on_png_warning);
+    if (r->png) r->info = png_create_info_struct(r->png);
+    if (!r->png || !r->info)
+      st = lsm_fail(err, LSM_ERR_NOMEM, name, "cannot create a PNG reader");
+    else if (!png_read_guarded(r))
+      st = lsm_fail(err, r->io.status, name, "%s", r->io.msg);
+  }
+
+  if (r->png) png_destroy_read_struct(&r->png, r->info ? &r->info : NULL, NULL);
+  free(r->rows);
+  free(r->buffer);
+  r->rows = NULL;
+  r->buffer = NULL;
+  if (st != LSM_OK) {
+    free(r->mask.pixels);
+    r->mask.pixels = NULL;
+    r->mask.width = r->mask.height = 0;
+  }
+  return st;
+}
+
+static lsm_status png_read_common(const char *path, png_reader *r, lsm_err *err) {
+  png_reader_init(r);
   if (!path) return lsm_fail(err, LSM_ERR_INPUT, NULL, "no PNG file name given");
   FILE *fp = fopen(path, "rb");
   if (!fp) return lsm_fail(err, LSM_ERR_INPUT, path, "cannot open: %s", strerror(errno));
@@ -237,35 +313,8 @@ static lsm_status png_read_common(const char *path, png_reader *r, lsm_err *err)
     fclose(fp);
     return lsm_fail(err, LSM_ERR_INPUT, path, "is a folder, not a PNG file");
   }
-  r->io.fp = fp;
-
-  lsm_status st = LSM_OK;
-  png_byte sig[PNG_SIG_BYTES];
-  size_t got = fread(sig, 1, sizeof sig, fp);
-  if (got != sizeof sig && ferror(fp)) {
-    st = lsm_fail(err, LSM_ERR_IO, path, "read error: %s", strerror(errno));
-  } else if (got != sizeof sig || png_sig_cmp(sig, 0, sizeof sig) != 0) {
-    st = lsm_fail(err, LSM_ERR_INPUT, path, "not a PNG file");
-  } else {
-    r->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &r->io, on_png_error, on_png_warning);
-    if (r->png) r->info = png_create_info_struct(r->png);
-    if (!r->png || !r->info)
-      st = lsm_fail(err, LSM_ERR_NOMEM, path, "cannot create a PNG reader");
-    else if (!png_read_guarded(r))
-      st = lsm_fail(err, r->io.status, path, "%s", r->io.msg);
-  }
-
-  if (r->png) png_destroy_read_struct(&r->png, r->info ? &r->info : NULL, NULL);
-  free(r->rows);
-  free(r->buffer);
-  r->rows = NULL;
-  r->buffer = NULL;
+  lsm_status st = png_read_stream(fp, path, r, err);
   fclose(fp); /* read-only: nothing to lose on close */
-  if (st != LSM_OK) {
-    free(r->mask.pixels);
-    r->mask.pixels = NULL;
-    r->mask.width = r->mask.height = 0;
-  }
   return st;
 }
 
@@ -284,15 +333,36 @@ lsm_status lsm_png_read_mask(const char *path, const lsm_png_read_opts *opts,
   return st;
 }
 
-lsm_status lsm_png_read_size(const char *path, int *width, int *height, lsm_err *err) {
+lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+                                    lsm_mask *out, lsm_err *err) {
   png_reader r;
-  r.opts = NULL;
+  r.opts = opts;
+  r.header_only = 0;
+  if (out) {
+    out->width = out->height = 0;
+    out->pixels = NULL;
+  }
+  if (!out || !fp) return lsm_fail(err, LSM_ERR_INTERNAL, name, "bad arguments to the PNG reader");
+  lsm_status st = png_read_stream(fp, name, &r, err);
+  if (st == LSM_OK) *out = r.mask;
+  return st;
+}
+
+lsm_status lsm_png_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
+                               lsm_err *err) {
+  png_reader r;
+  lsm_png_read_opts opts = {0, max_pixels};
+  r.opts = &opts;
   r.header_only = 1;
   lsm_status st = png_read_common(path, &r, err);
   if (st != LSM_OK) return st;
   if (width) *width = (int)r.width;
   if (height) *height = (int)r.height;
   return LSM_OK;
+}
+
+lsm_status lsm_png_read_size(const char *path, int *width, int *height, lsm_err *err) {
+  return lsm_png_read_header(path, 0, width, height, err);
 }
 
 /* ---- writing --------------------------------------------------------------- */

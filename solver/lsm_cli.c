@@ -1,5 +1,7 @@
 #include "lsm_cli.h"
 
+#include "../io/lsm_io.h"
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -12,11 +14,13 @@ static const char general_help[] =
     "Usage:\n"
     "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
     "  lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
+    "  lsmorph devices\n"
     "  lsmorph --help | --version | help COMMAND\n"
     "\n"
     "Commands:\n"
     "  reconstruct   read PNG slices, morph between consecutive slices, write a volume\n"
     "  score         compare a reconstruction with full-resolution truth slices\n"
+    "  devices       list the OpenCL platforms and devices\n"
     "\n"
     "Run 'lsmorph help reconstruct' for the options.\n";
 
@@ -36,7 +40,13 @@ static const char reconstruct_help[] =
     "  --heights FILE         one height per slice, strictly increasing (overrides --spacing)\n"
     "  --pixel-size S         physical size of a pixel (default 1); all distances,\n"
     "                         heights and the output signed distance use this unit\n"
-    "  --max-pixels N         refuse slices with more pixels (default 268435456)\n"
+    "  --max-pixels N         refuse slices with more pixels (default 268435456); with\n"
+    "                         --align auto|hull also a gap's working canvas, up to\n"
+    "                         (W+L) x (H+L) for W x H slices, L the longer side,\n"
+    "                         must stay within 4 N (use --align none for long strips)\n"
+    "  --max-voxels N         refuse runs whose output volume would have more voxels\n"
+    "                         (default 17179869184 = 2^34; not checked with\n"
+    "                         --per-iteration, where the count is not known ahead)\n"
     "\n"
     "Output:\n"
     "  --dz Z                 output slice spacing (default: the pixel size, isotropic\n"
@@ -46,10 +56,26 @@ static const char reconstruct_help[] =
     "  --per-iteration        the design document's mode: every solver iteration of\n"
     "                         every pair is a slice, heights by linspace per pair\n"
     "  --no-slices            do not write slices/*.png\n"
-    "\n"
+    "  --format LIST          volume formats, comma separated (default nrrd):\n"
+    "                         nrrd, mha (MetaImage), vtk (legacy VTK), exr (one\n"
+    "                         OpenEXR file per slice), raw (+ volume.json)\n"
+    "  --values sdf|mask      sdf: float32 signed distance (default); mask: uint8,\n"
+    "                         255 inside, 0 outside (EXR: half 1.0 / 0.0)\n"
+    "  --mesh                 also write surface.ply, a closed triangle mesh of the\n"
+    "                         surface phi = 0\n"
+    "  --no-preview           do not write preview.png and preview3d.png\n"
+    "\n";
+
+static const char reconstruct_help_method[] =
     "Method:\n"
-    "  --method ls|blend      ls: level-set morph (default); blend: linear interpolation\n"
-    "                         of the two signed distance functions\n"
+    "  --method ls|pls|blend  ls: level-set morph (default); pls: level-set morph\n"
+    "                         corrected by Lagrangian particles (keeps corners and thin\n"
+    "                         features); blend: linear interpolation of the two signed\n"
+    "                         distance functions\n"
+    "  --particles-per-cell N pls: particles seeded per band cell, half of each sign (16)\n"
+    "  --pls-reseed N         pls: reseed the particles every N steps (default 0 = never)\n"
+    "  --pls-radius-adjust    pls: reset particle radii after each correction (off)\n"
+    "  --seed N               pls: random seed (same seed, same volume, any --threads)\n"
     "  --scheme upwind|roe-fix  numerical Hamiltonian (default upwind: first-order\n"
     "                         Godunov; roe-fix: Algorithm 3.1 of the design document)\n"
     "  --time euler|rk2|rk3   time integrator (default euler; rk2/rk3: TVD Runge-Kutta)\n"
@@ -75,16 +101,44 @@ static const char reconstruct_help[] =
     "\n"
     "Running:\n"
     "  --threads N            threads for the grid loops (default: all cores)\n"
+    "  --backend c|opencl|auto  where the grid work runs (default c, the reference);\n"
+    "                         auto: OpenCL when a device is present, else C\n"
+    "  --device N             OpenCL device index from 'lsmorph devices'\n"
     "  -q, --quiet            no progress or notes on stderr\n"
-    "\n"
+    "\n";
+
+/* (several strings: one would pass the 4095 characters C compilers must support) */
+static const char reconstruct_help_files[] =
     "Files written to OUT_DIR:\n"
     "  volume.nrrd            float32 signed distance (negative inside) of every output\n"
     "                         slice, x fastest, spacings in physical units\n"
+    "  volume.mha             the same as MetaImage (--format mha; header + data in\n"
+    "                         one file, little endian)\n"
+    "  volume.vtk             the same as legacy VTK STRUCTURED_POINTS (--format vtk;\n"
+    "                         binary, big endian as the format requires)\n"
+    "  exr/00001.exr ...      one single-channel (Y) OpenEXR file per slice (--format\n"
+    "                         exr): float32, or half 1/0 with --values mask; header\n"
+    "                         attributes pixelSize, sliceHeight\n"
+    "  volume.raw, volume.json  headerless little-endian samples and a JSON sidecar\n"
+    "                         with sizes, spacing, origin, dtype (--format raw)\n"
+    "                         All volumes carry spacing and origin (the centre of the\n"
+    "                         first sample) in physical units.\n"
+    "  surface.ply            (--mesh) binary little-endian PLY of the surface\n"
+    "                         phi = 0 (marching tetrahedra, closed and manifold;\n"
+    "                         x = column * pixel, y = row * pixel, z = height;\n"
+    "                         outward normals)\n"
+    "  preview.png            up to 16 evenly spaced slices (input slices framed in\n"
+    "                         orange)\n"
+    "  preview3d.png          a shaded rendering of the surface\n"
     "  heights.txt            the height of each output slice, one per line\n"
     "  slices/00001.png ...   binary mask of each output slice (255 inside)\n"
     "  run.json               options, per-pair iterations, dt, CP, seconds, cells; totals\n"
     "\n"
-    "Exit status: 0 success, 1 bad input or failure, 2 usage error.\n";
+    "Exit status: 0 success, 1 bad input or failure, 2 usage error, 130 / 143\n"
+    "interrupted by SIGINT / SIGTERM (the process ends by that signal).  Results are\n"
+    "written to a temporary folder OUT_DIR.tmp-XXXXXX next to OUT_DIR and moved into\n"
+    "place only when complete; on any failure or interruption it is removed and an\n"
+    "earlier OUT_DIR is left as it was.\n";
 
 static const char score_help[] =
     "Usage: lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
@@ -97,8 +151,11 @@ static const char score_help[] =
     "relative volume error over all held-out slices.\n";
 
 void lsm_cli_help(FILE *f, const char *topic) {
-  if (topic && strcmp(topic, "reconstruct") == 0)
+  if (topic && strcmp(topic, "reconstruct") == 0) {
     fputs(reconstruct_help, f);
+    fputs(reconstruct_help_method, f);
+    fputs(reconstruct_help_files, f);
+  }
   else if (topic && strcmp(topic, "score") == 0)
     fputs(score_help, f);
   else
@@ -158,7 +215,12 @@ static void cli_defaults(lsm_cli *cli) {
   memset(cli, 0, sizeof *cli);
   cli->spacing = 1.0;
   cli->max_pixels = (uint64_t)1 << 28;
+  cli->max_voxels = (uint64_t)1 << 34;
   cli->write_slices = 1;
+  cli->formats = LSM_FORMAT_NRRD;
+  cli->values = LSM_VALUES_SDF;
+  cli->mesh = 0;
+  cli->preview = 1;
   lsm_stack_opts_default(&cli->stack);
 }
 
@@ -214,10 +276,21 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       so->per_iteration = 1;
     } else if (IS("--no-slices")) {
       cli->write_slices = 0;
+    } else if (IS("--format")) {
+      NEEDS_VALUE();
+      LSM_TRY(lsm_format_list_parse(v, &cli->formats, err));
+    } else if (IS("--values")) {
+      NEEDS_VALUE();
+      if ((cli->values = lsm_values_from_name(v)) == LSM_VALUES_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--values: '%s' is not one of sdf, mask", v);
+    } else if (IS("--mesh")) {
+      cli->mesh = 1;
+    } else if (IS("--no-preview")) {
+      cli->preview = 0;
     } else if (IS("--method")) {
       NEEDS_VALUE();
       if ((so->method = lsm_method_from_name(v)) == LSM_METHOD_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--method: '%s' is not one of ls, blend", v);
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--method: '%s' is not one of ls, pls, blend", v);
     } else if (IS("--scheme")) {
       NEEDS_VALUE();
       if ((so->morph.scheme = lsm_scheme_from_name(v)) == LSM_SCHEME_UNKNOWN)
@@ -244,6 +317,28 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       NEEDS_VALUE();
       LSM_TRY(parse_int(name, v, 1, INT_MAX, &n, err));
       so->max_iter = (int)n;
+    } else if (IS("--particles-per-cell")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 2, 256, &n, err));
+      so->morph.pls.particles_per_cell = (int)n;
+    } else if (IS("--pls-reseed")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 0, INT_MAX, &n, err));
+      so->morph.pls.reseed_every = (int)n;
+    } else if (IS("--pls-radius-adjust")) {
+      so->morph.pls.radius_adjust = 1;
+    } else if (IS("--seed")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 0, LONG_MAX, &n, err));
+      so->morph.pls.seed = (uint64_t)n;
+    } else if (IS("--backend")) {
+      NEEDS_VALUE();
+      if ((cli->backend = lsm_backend_kind_from_name(v)) == LSM_BACKEND_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--backend: '%s' is not one of c, opencl, auto", v);
+    } else if (IS("--device")) {
+      NEEDS_VALUE();
+      LSM_TRY(parse_int(name, v, 0, 1000, &n, err));
+      cli->device = (int)n;
     } else if (IS("--interp")) {
       NEEDS_VALUE();
       if ((so->interp = lsm_interp_from_name(v)) == LSM_INTERP_UNKNOWN)
@@ -263,6 +358,13 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       if (d > 9.0e15 || d != floor(d))
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-pixels: '%s' is not a whole number of pixels", v);
       cli->max_pixels = (uint64_t)d;
+    } else if (IS("--max-voxels")) {
+      NEEDS_VALUE();
+      double d;
+      LSM_TRY(parse_double(name, v, &d, 1, err));
+      if (d > 9.0e15 || d != floor(d))
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-voxels: '%s' is not a whole number of voxels", v);
+      cli->max_voxels = (uint64_t)d;
     } else if (IS("-q") || IS("--quiet")) {
       cli->quiet = 1;
     } else {
@@ -330,6 +432,11 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   if (strcmp(cmd, "reconstruct") == 0) {
     cli->command = LSM_CMD_RECONSTRUCT;
     return parse_reconstruct(&c, cli, err);
+  }
+  if (strcmp(cmd, "devices") == 0) {
+    cli->command = LSM_CMD_DEVICES;
+    if (argc > 2) return lsm_fail(err, LSM_ERR_USAGE, NULL, "devices takes no arguments");
+    return LSM_OK;
   }
   if (strcmp(cmd, "score") == 0) {
     cli->command = LSM_CMD_SCORE;

@@ -15,7 +15,8 @@ typedef enum lsm_command {
   LSM_CMD_HELP,
   LSM_CMD_VERSION,
   LSM_CMD_RECONSTRUCT,
-  LSM_CMD_SCORE
+  LSM_CMD_SCORE,
+  LSM_CMD_DEVICES
 } lsm_command;
 
 typedef struct lsm_cli {
@@ -30,7 +31,14 @@ typedef struct lsm_cli {
   int quiet;
   int threads;               /* 0 = all cores */
   uint64_t max_pixels;       /* per slice */
+  uint64_t max_voxels;       /* output volume (default mode) */
   int write_slices;          /* PNG masks of every output slice */
+  lsm_backend_kind backend;  /* --backend (default c) */
+  int device;                /* --device N (-1: first GPU, else first device) */
+  unsigned formats;          /* --format: set of LSM_FORMAT_* bits (io/lsm_io.h) */
+  int values;                /* --values: LSM_VALUES_SDF or LSM_VALUES_MASK */
+  int mesh;                  /* --mesh: write surface.ply */
+  int preview;               /* preview.png and preview3d.png (--no-preview: 0) */
   lsm_stack_opts stack;
   /* score */
   const char *truth_dir;

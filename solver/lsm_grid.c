@@ -32,8 +32,9 @@ size_t lsm_mask_count(const lsm_mask *mask) {
   return count;
 }
 
-lsm_status lsm_grid_create(int nx, int ny, float dx, float dy, lsm_grid **out,
-                           lsm_err *err) {
+/* Allocates the grid; zero-fills it unless the caller overwrites every value. */
+static lsm_status grid_alloc(int nx, int ny, float dx, float dy, int zero, lsm_grid **out,
+                             lsm_err *err) {
   *out = NULL;
   if (nx <= 0 || ny <= 0)
     return lsm_fail(err, LSM_ERR_INPUT, NULL, "grid size %dx%d is not positive", nx, ny);
@@ -49,7 +50,7 @@ lsm_status lsm_grid_create(int nx, int ny, float dx, float dy, lsm_grid **out,
     free(g);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  memset(g->base, 0, n * sizeof(float));
+  if (zero) memset(g->base, 0, n * sizeof(float));
   g->nx = nx;
   g->ny = ny;
   g->ghost = LSM_GHOST;
@@ -59,6 +60,11 @@ lsm_status lsm_grid_create(int nx, int ny, float dx, float dy, lsm_grid **out,
   g->data = g->base + LSM_GHOST * g->stride + LSM_GHOST;
   *out = g;
   return LSM_OK;
+}
+
+lsm_status lsm_grid_create(int nx, int ny, float dx, float dy, lsm_grid **out,
+                           lsm_err *err) {
+  return grid_alloc(nx, ny, dx, dy, 1, out, err);
 }
 
 void lsm_grid_destroy(lsm_grid **grid) {
@@ -73,7 +79,7 @@ static size_t grid_floats(const lsm_grid *g) {
 }
 
 lsm_status lsm_grid_clone(const lsm_grid *src, lsm_grid **out, lsm_err *err) {
-  LSM_TRY(lsm_grid_create(src->nx, src->ny, src->dx, src->dy, out, err));
+  LSM_TRY(grid_alloc(src->nx, src->ny, src->dx, src->dy, 0, out, err));
   lsm_grid_copy(*out, src);
   return LSM_OK;
 }

@@ -11,7 +11,9 @@
 #ifndef LSM_MORPH_H
 #define LSM_MORPH_H
 
+#include "lsm_backend.h"
 #include "lsm_grid.h"
+#include "lsm_particles.h"
 #include "lsm_scheme.h"
 #include "lsm_status.h"
 
@@ -22,6 +24,11 @@ typedef struct lsm_morph_opts {
   int reinit_every;   /* reinitialise every N steps; 0 = never (the document) */
   int reinit_iters;   /* pseudo-time iterations per reinitialisation (default 10) */
   int threads;        /* OpenMP threads for the cell loops (>= 1) */
+  int track_cp;       /* compute CP after every step (per-iteration mode); otherwise the
+                         residual is checked every 16 steps, for NaN/Inf detection */
+  int particles;      /* 1: particle level set correction (Enright et al. 2002) */
+  lsm_pls_opts pls;   /* particle options (lsm_pls_opts_default) */
+  const lsm_backend *backend; /* where the grid work runs; NULL = the C backend */
 } lsm_morph_opts;
 
 void lsm_morph_opts_default(lsm_morph_opts *opts);
@@ -43,8 +50,13 @@ lsm_status lsm_morph_step(lsm_morph *morph, double max_dt, lsm_err *err);
  * the time short of t: check lsm_morph_time). */
 lsm_status lsm_morph_advance_to(lsm_morph *morph, double t, int max_iter, lsm_err *err);
 
-const lsm_grid *lsm_morph_phi(const lsm_morph *morph);
+/* The current phi on the host (downloaded from the device when the backend
+ * keeps it there).  NULL if the download failed: lsm_morph_error tells why. */
+const lsm_grid *lsm_morph_phi(lsm_morph *morph);
 const lsm_grid *lsm_morph_target(const lsm_morph *morph);
+const lsm_err *lsm_morph_error(const lsm_morph *morph);
+/* Particle statistics, or NULL without particles. */
+const lsm_pls_stats *lsm_morph_pls_stats(const lsm_morph *morph);
 double lsm_morph_time(const lsm_morph *morph);
 double lsm_morph_dt(const lsm_morph *morph);
 int lsm_morph_iterations(const lsm_morph *morph);

@@ -87,8 +87,10 @@ typedef struct lsm_particles lsm_particles;
  *    [-v_max, -v_min] (s = -1), v_min = 0.1 min(dx,dy), v_max = 3 max(dx,dy),
  *    and iterates up to 10 times p <- p + lambda (phi_goal - phi(p)) N(p)
  *    (per axis divided by dx or dy), lambda = 1 halved while the new point
- *    leaves the domain; it stops as soon as phi(p) is in its band, and is
- *    discarded (stats.discarded) if it never gets there;
+ *    leaves the domain (at most 30 halvings, then clamped); it stops after
+ *    the first move that lands phi(p) in its band (at least one move is made,
+ *    as in the document), and is discarded (stats.discarded) if none of the
+ *    10 does;
  *  - radius r = clamp(s phi(p), r_min, r_max), r_min = 0.1 min(dx,dy),
  *    r_max = 0.5 min(dx,dy).
  * Particles are stored cell by cell in row-major cell order, slot order within
@@ -144,8 +146,9 @@ void lsm_pls_stage_hook(void *ctx, const lsm_grid *in, const lsm_grid *phi_targe
  * reseed_every corrections, reseeding (all particles dropped and seeded again
  * on the corrected phi, as lsm_pls_create does).  Refills phi's ghosts.
  * phi must have the size of the grid the set was created on.
- * Errors: LSM_ERR_NOMEM / LSM_ERR_LIMIT when a reseeding cannot grow the
- * arrays (the set is then left empty, phi is corrected). */
+ * Errors: LSM_ERR_INTERNAL (phi's size differs from the seeding grid;
+ * nothing is done), LSM_ERR_NOMEM / LSM_ERR_LIMIT when a reseeding cannot grow
+ * the arrays (the set is then left empty, phi is corrected). */
 lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err);
 
 /* Counters (valid until the set is destroyed). */

@@ -145,29 +145,46 @@ void lsm_stepper_destroy(lsm_stepper **stepper) {
   *stepper = NULL;
 }
 
-void lsm_step(lsm_stepper *st, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
-              const lsm_grid *phi_target, float dt, int threads) {
+/* One stage, after telling the hook. */
+static void hooked_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
+                         const lsm_grid *phi_target, float c0, float c1, float dt, int threads,
+                         const lsm_stage_hook *hook) {
+  if (hook && hook->stage) {
+    lsm_grid_fill_ghosts(in);
+    hook->stage(hook->ctx, in, phi_target, c0, c1, dt);
+  }
+  lsm_scheme_stage(scheme, out, u0, in, phi_target, c0, c1, dt, threads);
+}
+
+void lsm_step_hooked(lsm_stepper *st, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
+                     const lsm_grid *phi_target, float dt, int threads,
+                     const lsm_stage_hook *hook) {
   switch (time) {
   case LSM_TIME_RK2:
     /* phi1 = phi - dt L(phi);  phi = 1/2 phi + 1/2 (phi1 - dt L(phi1)) */
-    lsm_scheme_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads);
-    lsm_scheme_stage(scheme, phi, phi, st->stage1, phi_target, 0.5f, 0.5f, dt, threads);
+    hooked_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads, hook);
+    hooked_stage(scheme, phi, phi, st->stage1, phi_target, 0.5f, 0.5f, dt, threads, hook);
     break;
   case LSM_TIME_RK3:
     /* phi1 = phi - dt L(phi)
      * phi2 = 3/4 phi + 1/4 (phi1 - dt L(phi1))
      * phi  = 1/3 phi + 2/3 (phi2 - dt L(phi2)) */
-    lsm_scheme_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads);
-    lsm_scheme_stage(scheme, st->stage2, phi, st->stage1, phi_target, 0.75f, 0.25f, dt, threads);
-    lsm_scheme_stage(scheme, phi, phi, st->stage2, phi_target, 1.0f / 3.0f, 2.0f / 3.0f, dt,
-                     threads);
+    hooked_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads, hook);
+    hooked_stage(scheme, st->stage2, phi, st->stage1, phi_target, 0.75f, 0.25f, dt, threads, hook);
+    hooked_stage(scheme, phi, phi, st->stage2, phi_target, 1.0f / 3.0f, 2.0f / 3.0f, dt, threads,
+                 hook);
     break;
   default:
     /* phi = phi - dt L(phi): computed into stage1 (in and out must differ). */
-    lsm_scheme_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads);
+    hooked_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads, hook);
     lsm_grid_copy(phi, st->stage1);
     break;
   }
+}
+
+void lsm_step(lsm_stepper *st, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
+              const lsm_grid *phi_target, float dt, int threads) {
+  lsm_step_hooked(st, scheme, time, phi, phi_target, dt, threads, NULL);
 }
 
 /* ---- norms -------------------------------------------------------------------------- */

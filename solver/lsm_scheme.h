@@ -56,6 +56,20 @@ void lsm_stepper_destroy(lsm_stepper **stepper);
 void lsm_step(lsm_stepper *stepper, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
               const lsm_grid *phi_target, float dt, int threads);
 
+/* Called before each Runge–Kutta stage out = c0 u0 + c1 (in - dt Hhat(in))
+ * with that stage's input field, so Lagrangian particles can take the same
+ * stage (lsm_pls_stage). */
+typedef struct lsm_stage_hook {
+  void *ctx;
+  void (*stage)(void *ctx, const lsm_grid *in, const lsm_grid *phi_target, float c0, float c1,
+                float dt);
+} lsm_stage_hook;
+
+/* lsm_step with a stage hook (may be NULL). */
+void lsm_step_hooked(lsm_stepper *stepper, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
+                     const lsm_grid *phi_target, float dt, int threads,
+                     const lsm_stage_hook *hook);
+
 /* ||a - b||_2 over the interior (Frobenius norm, physical units), summed in
  * double row by row and then in row order, so the value does not depend on
  * the thread count. */

@@ -12,7 +12,7 @@
 
 /* ---- names ------------------------------------------------------------------------ */
 
-static const char *const method_names[LSM_METHOD_COUNT] = {"ls", "blend"};
+static const char *const method_names[LSM_METHOD_COUNT] = {"ls", "blend", "pls"};
 static const char *const input_names[LSM_INPUT_COUNT] = {"mask", "outline"};
 static const char *const align_names[LSM_ALIGN_COUNT] = {"hull", "none", "auto"};
 static const char *const interp_names[LSM_INTERP_COUNT] = {"linear", "cubic"};
@@ -50,6 +50,7 @@ lsm_interp lsm_interp_from_name(const char *name) {
 }
 
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
+  memset(opts, 0, sizeof *opts);
   opts->method = LSM_METHOD_LS;
   opts->input = LSM_INPUT_MASK;
   opts->align = LSM_ALIGN_AUTO;
@@ -290,9 +291,11 @@ typedef struct stack_run {
   const lsm_slice_sink *sink;
   const lsm_progress *progress;
   int width, height;
+  lsm_morph_opts morph;  /* the morph options of this run (particles, CP tracking) */
   float *out;            /* one output slice */
   lsm_grid *image_phi;   /* an input slice's phi in the image frame */
   size_t done, total;
+  int gap_workers;       /* gaps run at once (default mode) */
 } stack_run;
 
 static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
@@ -491,6 +494,17 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
   return st;
 }
 
+/* Adds a morph's particle counters to the pair's. */
+static void add_pls_stats(lsm_pair_stats *ps, const lsm_morph *m) {
+  const lsm_pls_stats *q = m ? lsm_morph_pls_stats(m) : NULL;
+  if (!q) return;
+  ps->pls_seeded += q->seeded;
+  ps->pls_discarded += q->discarded + q->left_domain;
+  ps->pls_escaped += q->escaped_total;
+  ps->pls_corrected += q->corrected_total;
+  ps->pls_steps += q->steps;
+}
+
 /* Two-sided level-set morph of a gap (both slices non-empty).
  *
  * The morph equation moves a front point with normal speed -phi_T: parts of
@@ -506,7 +520,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
  * in an anonymous temporary file, one working grid each. */
 static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const double *fs,
                                 size_t n, lsm_pair_stats *ps, lsm_err *err) {
-  const lsm_morph_opts *mo = &r->opts->morph;
+  const lsm_morph_opts *mo = &r->morph;
   const int max_iter = r->opts->max_iter;
   const lsm_grid *pa = g->phi_a, *pb = g->phi_b;
   const size_t cells = (size_t)pa->nx * (size_t)pa->ny;
@@ -528,6 +542,10 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
     if (st != LSM_OK) break;
     if (lsm_morph_time(rev) < t * (1.0 - 1e-9)) ps->hit_max_iter = 1;
     const lsm_grid *p = lsm_morph_phi(rev);
+    if (!p) {
+      st = lsm_fail(err, lsm_morph_error(rev)->status, NULL, "%s", lsm_morph_error(rev)->msg);
+      break;
+    }
     for (int j = 0; j < p->ny; ++j) memcpy(row + (size_t)j * p->nx, &LSM_AT(p, 0, j), (size_t)p->nx * sizeof(float));
     if (fseeko(park, (off_t)(q * cells * sizeof(float)), SEEK_SET) != 0 ||
         fwrite(row, sizeof(float), cells, park) != cells)
@@ -545,6 +563,10 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
       break;
     }
     const lsm_grid *pf = lsm_morph_phi(fwd);
+    if (!pf) {
+      st = lsm_fail(err, lsm_morph_error(fwd)->status, NULL, "%s", lsm_morph_error(fwd)->msg);
+      break;
+    }
     for (int j = 0; j < mix->ny; ++j) {
       const float *f = &LSM_AT(pf, 0, j), *a = &LSM_AT(pa, 0, j), *b = &LSM_AT(pb, 0, j);
       const float *rv = row + (size_t)j * mix->nx;
@@ -575,6 +597,8 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
     t0 = now_seconds();
     ps->slices++;
   }
+  add_pls_stats(ps, fwd);
+  add_pls_stats(ps, rev);
   if (fwd && rev) {
     ps->iterations = lsm_morph_iterations(fwd) + lsm_morph_iterations(rev);
     ps->dt = lsm_morph_dt(fwd);
@@ -639,7 +663,7 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
   lsm_morph *m = NULL;
   const double t0 = now_seconds();
-  lsm_status st = lsm_morph_create(g.phi_a, g.phi_b, &r->opts->morph, &m, err);
+  lsm_status st = lsm_morph_create(g.phi_a, g.phi_b, &r->morph, &m, err);
   int k = 0;
   while (st == LSM_OK && k < r->opts->max_iter) {
     st = lsm_morph_step(m, INFINITY, err);
@@ -655,18 +679,24 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
   }
   lsm_morph_destroy(&m);
   double solver = now_seconds() - t0;
-  if (st == LSM_OK) st = lsm_morph_create(g.phi_a, g.phi_b, &r->opts->morph, &m, err);
+  if (st == LSM_OK) st = lsm_morph_create(g.phi_a, g.phi_b, &r->morph, &m, err);
   for (int n = 1; st == LSM_OK && n <= k; ++n) {
     double t1 = now_seconds();
     st = lsm_morph_step(m, INFINITY, err);
     if (st != LSM_OK) break;
     const double s = (double)n / (double)(k + 1);
-    frame_extract(&g.f, lsm_morph_phi(m), s, r->out);
+    const lsm_grid *pm = lsm_morph_phi(m);
+    if (!pm) {
+      st = lsm_fail(err, lsm_morph_error(m)->status, NULL, "%s", lsm_morph_error(m)->msg);
+      break;
+    }
+    frame_extract(&g.f, pm, s, r->out);
     solver += now_seconds() - t1;
     st = emit(r, za + s * (zb - za), -1, err);
     ps->slices++;
   }
   ps->seconds = solver;
+  add_pls_stats(ps, m);
   lsm_morph_destroy(&m);
   gap_free(&g);
   return st;
@@ -676,6 +706,228 @@ size_t lsm_stack_output_count(const double *z, size_t count, double dz) {
   if (count == 0 || !(dz > 0.0)) return 0;
   double span = z[count - 1] - z[0];
   return (size_t)floor(span / dz + 1e-6) + 1;
+}
+
+/* ---- the gaps of the default mode, one task each ------------------------------------------ */
+
+/* A gap's output slices (an lsm_gap_result), held until their turn when gaps
+ * run concurrently or on another process. */
+static lsm_status buffer_emit(void *ctx, const float *phi, int width, int height, double z,
+                              long input_index, lsm_err *err) {
+  lsm_gap_result *b = ctx;
+  const size_t cells = (size_t)width * (size_t)height;
+  if ((b->count & (b->count - 1)) == 0) { /* grow at powers of two */
+    const size_t cap = b->count ? 2 * b->count : 1;
+    size_t bytes;
+    if (!lsm_size_mul(cap, cells * sizeof(float), &bytes))
+      return lsm_fail(err, LSM_ERR_LIMIT, NULL, "gap buffer size overflows");
+    float *phis = realloc(b->phi, bytes);
+    if (!phis) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot buffer the slices of a gap");
+    b->phi = phis;
+    double *zs = realloc(b->z, cap * sizeof *zs);
+    if (!zs) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot buffer the slices of a gap");
+    b->z = zs;
+    long *in = realloc(b->input, cap * sizeof *in);
+    if (!in) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot buffer the slices of a gap");
+    b->input = in;
+  }
+  memcpy(b->phi + b->count * cells, phi, cells * sizeof(float));
+  b->z[b->count] = z;
+  b->input[b->count] = input_index;
+  b->width = width;
+  b->height = height;
+  b->count++;
+  return LSM_OK;
+}
+
+void lsm_gap_result_free(lsm_gap_result *b) {
+  if (!b) return;
+  free(b->phi);
+  free(b->z);
+  free(b->input);
+  memset(b, 0, sizeof *b);
+}
+
+/* Hands a finished gap's slices to the real sink, in order. */
+static lsm_status buffer_replay(stack_run *r, const lsm_gap_result *b, lsm_err *err) {
+  const size_t cells = (size_t)r->width * (size_t)r->height;
+  for (size_t k = 0; k < b->count; ++k) {
+    memcpy(r->out, b->phi + k * cells, cells * sizeof(float));
+    LSM_TRY(emit(r, b->z[k], b->input[k], err));
+  }
+  return LSM_OK;
+}
+
+/* The output range of gap i: indices [first, last) of the regular grid with
+ * heights in [z_i, z_{i+1}). */
+typedef struct gap_plan {
+  size_t first, last;
+} gap_plan;
+
+/* Gap i of the default mode, start to end: loads its own window of input
+ * slices (A, B, and the neighbours for the cubic), emits the input slice on
+ * z_A if it lies on the grid, then the intermediate slices.  `r` is this
+ * task's own run (its sink, output buffer and scratch). */
+static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double z0, double dz,
+                           double eps, lsm_pair_stats *ps, lsm_err *err) {
+  const lsm_slice_source *src = r->src;
+  const lsm_stack_opts *o = r->opts;
+  const int cubic = o->interp == LSM_INTERP_CUBIC;
+  slice s[4];
+  memset(s, 0, sizeof s);
+  memset(ps, 0, sizeof *ps);
+  ps->source = i;
+  ps->target = i + 1;
+  lsm_status st = LSM_OK;
+  for (int k = 0; k < 4 && st == LSM_OK; ++k) {
+    const long idx = (long)i - 1 + k;
+    if (idx < 0 || idx >= (long)src->count) continue;
+    if ((k == 0 || k == 3) && !cubic) continue;
+    st = slice_load(src, (size_t)idx, r->width, r->height, o->input, &s[k], err);
+  }
+  const double za = src->z[i], zb = src->z[i + 1];
+  const size_t n_out = plan->last - plan->first;
+  double *zs = NULL, *fs = NULL;
+  if (st == LSM_OK) {
+    zs = lsm_alloc(n_out + 1, sizeof *zs, err, "heights");
+    fs = zs ? lsm_alloc(n_out + 1, sizeof *fs, err, "fractions") : NULL;
+    if (!fs) st = err ? err->status : LSM_ERR_NOMEM;
+  }
+  size_t n = 0;
+  for (size_t q = plan->first; st == LSM_OK && q < plan->last; ++q) {
+    const double z = z0 + (double)q * dz;
+    if (fabs(z - za) <= eps) {
+      st = emit_input(r, &s[1], i, z, err);
+      continue;
+    }
+    zs[n] = z;
+    fs[n] = (z - za) / (zb - za);
+    ++n;
+  }
+  if (st == LSM_OK) {
+    window w = {{s[0].loaded ? &s[0] : NULL, &s[1], &s[2], s[3].loaded ? &s[3] : NULL},
+                {i > 0 ? src->z[i - 1] : 0.0, za, zb, i + 2 < src->count ? src->z[i + 2] : 0.0}};
+    st = run_gap_regular(r, &w, zs, fs, n, ps, err);
+  }
+  free(zs);
+  free(fs);
+  for (int k = 0; k < 4; ++k) slice_free(&s[k]);
+  return st;
+}
+
+/* How many gaps to run at once: all cores on separate gaps when one gap's
+ * grid is too small to keep them busy (up to 1024^2 pixels), else one gap at
+ * a time with the threads inside it. */
+static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps) {
+  const int threads = o->morph.threads < 1 ? 1 : o->morph.threads;
+  if (threads == 1 || gaps < 2 || (long long)width * height > 1024LL * 1024LL) return 1;
+  return (size_t)threads < gaps ? threads : (int)gaps;
+}
+
+/* Per-iteration mode: gap by gap (the slice count of a gap is known only
+ * after it ran), with the threads inside each gap. */
+static lsm_status run_per_iteration(stack_run *r, lsm_pair_stats *stats, lsm_err *err) {
+  const lsm_slice_source *src = r->src;
+  slice a = {0}, b = {0};
+  lsm_status st = slice_load(src, 0, r->width, r->height, r->opts->input, &a, err);
+  if (st == LSM_OK) st = emit_input(r, &a, 0, src->z[0], err);
+  for (size_t i = 0; st == LSM_OK && i + 1 < src->count; ++i) {
+    lsm_pair_stats *ps = &stats[i];
+    memset(ps, 0, sizeof *ps);
+    ps->source = i;
+    ps->target = i + 1;
+    st = slice_load(src, i + 1, r->width, r->height, r->opts->input, &b, err);
+    if (st != LSM_OK) break;
+    window w = {{NULL, &a, &b, NULL}, {0.0, src->z[i], src->z[i + 1], 0.0}};
+    st = run_gap_iterations(r, &w, ps, err);
+    if (st == LSM_OK) st = emit_input(r, &b, i + 1, src->z[i + 1], err);
+    slice_free(&a);
+    a = b;
+    memset(&b, 0, sizeof b);
+  }
+  slice_free(&a);
+  slice_free(&b);
+  return st;
+}
+
+/* ---- gaps spread over processes ---------------------------------------------------------- */
+
+/* This process computes gap i into res (slices, statistics or the error). */
+static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, double z0,
+                        double dz, double eps, lsm_gap_result *res) {
+  memset(res, 0, sizeof *res);
+  lsm_err e;
+  lsm_err_clear(&e);
+  stack_run task = *base;
+  lsm_slice_sink buffered = {res, buffer_emit};
+  task.sink = &buffered;
+  task.progress = NULL;
+  task.image_phi = NULL;
+  task.out = lsm_alloc((size_t)base->width * (size_t)base->height, sizeof(float), &e, "output slice");
+  lsm_status st = task.out ? lsm_grid_create(base->width, base->height,
+                                             (float)base->opts->pixel_size,
+                                             (float)base->opts->pixel_size, &task.image_phi, &e)
+                           : e.status;
+  if (st == LSM_OK && base->opts->per_iteration) {
+    slice a = {0}, b = {0};
+    st = slice_load(base->src, i, base->width, base->height, base->opts->input, &a, &e);
+    if (st == LSM_OK)
+      st = slice_load(base->src, i + 1, base->width, base->height, base->opts->input, &b, &e);
+    memset(&res->stats, 0, sizeof res->stats);
+    res->stats.source = i;
+    res->stats.target = i + 1;
+    window w = {{NULL, &a, &b, NULL}, {0.0, base->src->z[i], base->src->z[i + 1], 0.0}};
+    if (st == LSM_OK) st = run_gap_iterations(&task, &w, &res->stats, &e);
+    if (st == LSM_OK) st = emit_input(&task, &b, i + 1, base->src->z[i + 1], &e);
+    slice_free(&a);
+    slice_free(&b);
+  } else if (st == LSM_OK) {
+    st = gap_task(&task, i, plan, z0, dz, eps, &res->stats, &e);
+  }
+  res->status = st;
+  if (st != LSM_OK) snprintf(res->msg, sizeof res->msg, "%s", e.msg[0] ? e.msg : lsm_status_name(st));
+  lsm_grid_destroy(&task.image_phi);
+  free(task.out);
+}
+
+/* Gap i is computed by rank i % size; rank 0 writes everything, in order. */
+static lsm_status run_distributed(stack_run *r, const gap_plan *plan, double z0, double dz,
+                                  double eps, lsm_pair_stats *stats, lsm_err *err) {
+  const lsm_gap_transport *t = r->opts->transport;
+  const size_t gaps = r->src->count - 1;
+  lsm_status st = LSM_OK;
+  if (t->rank == 0 && r->opts->per_iteration) {
+    slice first = {0};
+    st = slice_load(r->src, 0, r->width, r->height, r->opts->input, &first, err);
+    if (st == LSM_OK) st = emit_input(r, &first, 0, r->src->z[0], err);
+    slice_free(&first);
+  }
+  for (size_t i = 0; st == LSM_OK && i < gaps; ++i) {
+    const int owner = (int)(i % (size_t)t->size);
+    lsm_gap_result res;
+    memset(&res, 0, sizeof res);
+    if (owner == t->rank) {
+      compute_gap(r, i, plan ? &plan[i] : NULL, z0, dz, eps, &res);
+      res.stats.rank = t->rank;
+      if (t->rank != 0) {
+        st = t->send(t->ctx, i, &res, err);
+        if (st == LSM_OK && res.status != LSM_OK) st = lsm_fail(err, res.status, NULL, "%s", res.msg);
+        lsm_gap_result_free(&res);
+        continue;
+      }
+    } else if (t->rank == 0) {
+      st = t->recv(t->ctx, i, owner, &res, err);
+    } else {
+      continue; /* another worker's gap */
+    }
+    if (st == LSM_OK && res.status != LSM_OK) st = lsm_fail(err, res.status, NULL, "%s", res.msg);
+    if (st == LSM_OK) {
+      stats[i] = res.stats;
+      st = buffer_replay(r, &res, err);
+    }
+    lsm_gap_result_free(&res);
+  }
+  return st;
 }
 
 lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
@@ -691,83 +943,112 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
   if (opts->per_iteration && opts->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a solver method, not blend");
   const double dz = opts->dz > 0.0 ? opts->dz : opts->pixel_size;
+  const size_t gaps = src->count - 1;
 
-  stack_run r = {src, opts, sink, progress, width, height, NULL, NULL, 0, 0};
+  stack_run r;
+  memset(&r, 0, sizeof r);
+  r.src = src;
+  r.opts = opts;
+  r.sink = sink;
+  r.progress = progress;
+  r.width = width;
+  r.height = height;
+  r.morph = opts->morph;
+  r.morph.track_cp = opts->per_iteration; /* default mode: CP of each snapshot's last step */
+  r.morph.particles = opts->method == LSM_METHOD_PLS;
   r.out = lsm_alloc((size_t)width * (size_t)height, sizeof(float), err, "output slice");
   if (!r.out) return err ? err->status : LSM_ERR_NOMEM;
   lsm_status st = lsm_grid_create(width, height, (float)opts->pixel_size,
                                   (float)opts->pixel_size, &r.image_phi, err);
-  r.total = opts->per_iteration ? 0 : lsm_stack_output_count(src->z, src->count, dz);
+  const int distributed = opts->transport && opts->transport->size > 1;
+  if (st == LSM_OK && opts->per_iteration) {
+    st = distributed ? run_distributed(&r, NULL, 0.0, 0.0, 0.0, stats, err)
+                     : run_per_iteration(&r, stats, err);
+    lsm_grid_destroy(&r.image_phi);
+    free(r.out);
+    return st;
+  }
 
-  /* The sliding window of input slices: prev, A, B, next (at most four held). */
-  slice prev = {0}, a = {0}, b = {0}, next = {0};
+  /* Default mode: the regular output grid, split by gap. */
+  r.total = lsm_stack_output_count(src->z, src->count, dz);
   const size_t K = r.total;
   const double z0 = src->z[0], eps = 1e-6 * dz;
-  double *zs = NULL, *fs = NULL;
-  size_t k = 0; /* next output index (default mode) */
-  const int cubic = opts->interp == LSM_INTERP_CUBIC && !opts->per_iteration;
-  if (st == LSM_OK) st = slice_load(src, 0, width, height, opts->input, &a, err);
-  if (st == LSM_OK) st = slice_load(src, 1, width, height, opts->input, &b, err);
-  if (st == LSM_OK && opts->per_iteration) st = emit_input(&r, &a, 0, src->z[0], err);
-  for (size_t i = 0; st == LSM_OK && i + 1 < src->count; ++i) {
-    lsm_pair_stats *ps = &stats[i];
-    memset(ps, 0, sizeof *ps);
-    ps->source = i;
-    ps->target = i + 1;
-    if (cubic && i + 2 < src->count) st = slice_load(src, i + 2, width, height, opts->input, &next, err);
-    if (st != LSM_OK) break;
-    window w = {{i > 0 ? &prev : NULL, &a, &b, i + 2 < src->count ? &next : NULL},
-                {i > 0 ? src->z[i - 1] : 0.0, src->z[i], src->z[i + 1],
-                 i + 2 < src->count ? src->z[i + 2] : 0.0}};
-    const double za = src->z[i], zb = src->z[i + 1];
-    if (opts->per_iteration) {
-      st = run_gap_iterations(&r, &w, ps, err);
-      if (st == LSM_OK) st = emit_input(&r, &b, i + 1, zb, err);
-    } else {
-      /* Output heights in [za, zb): the one on za (if any) is slice i itself. */
-      size_t first = k, n = 0;
-      while (k < K && z0 + (double)k * dz < zb - eps) ++k;
-      free(zs);
-      free(fs);
-      zs = lsm_alloc(k - first + 1, sizeof *zs, err, "heights");
-      fs = lsm_alloc(k - first + 1, sizeof *fs, err, "fractions");
-      if (!zs || !fs) {
-        st = err ? err->status : LSM_ERR_NOMEM;
-        break;
-      }
-      for (size_t q = first; q < k; ++q) {
-        double z = z0 + (double)q * dz;
-        if (fabs(z - za) <= eps) {
-          st = emit_input(&r, &a, i, z, err);
-          if (st != LSM_OK) break;
-          continue;
-        }
-        zs[n] = z;
-        fs[n] = (z - za) / (zb - za);
-        ++n;
-      }
-      if (st == LSM_OK) st = run_gap_regular(&r, &w, zs, fs, n, ps, err);
-    }
-    /* Slide: prev <- A <- B <- next; load B for the next gap if not cubic. */
-    slice_free(&prev);
-    prev = a;
-    a = b;
-    b = next;
-    memset(&next, 0, sizeof next);
-    if (st == LSM_OK && !cubic && i + 2 < src->count)
-      st = slice_load(src, i + 2, width, height, opts->input, &b, err);
-    if (!cubic) slice_free(&prev); /* linear needs only A and B */
+  gap_plan *plan = st == LSM_OK ? lsm_alloc(gaps, sizeof *plan, err, "gap plan") : NULL;
+  if (st == LSM_OK && !plan) st = err ? err->status : LSM_ERR_NOMEM;
+  size_t k = 0;
+  for (size_t i = 0; st == LSM_OK && i < gaps; ++i) {
+    plan[i].first = k;
+    while (k < K && z0 + (double)k * dz < src->z[i + 1] - eps) ++k;
+    plan[i].last = k;
   }
-  /* The last input slice, if it lies on the output grid. */
-  if (st == LSM_OK && !opts->per_iteration && k < K &&
-      fabs(z0 + (double)k * dz - src->z[src->count - 1]) <= eps)
-    st = emit_input(&r, &a, src->count - 1, z0 + (double)k * dz, err);
-  free(zs);
-  free(fs);
-  slice_free(&prev);
-  slice_free(&a);
-  slice_free(&b);
-  slice_free(&next);
+  const int workers = st == LSM_OK && !distributed ? gap_workers(opts, width, height, gaps) : 1;
+  r.gap_workers = workers;
+  if (st == LSM_OK && distributed) {
+    st = run_distributed(&r, plan, z0, dz, eps, stats, err);
+  } else if (st == LSM_OK && workers == 1) {
+    for (size_t i = 0; st == LSM_OK && i < gaps; ++i)
+      st = gap_task(&r, i, &plan[i], z0, dz, eps, &stats[i], err);
+  } else if (st == LSM_OK) {
+    /* Gaps run concurrently, each single-threaded with its own buffers; the
+     * ordered block hands their slices to the sink in stack order, so the
+     * output is the same as one gap at a time, and at most `workers` gaps'
+     * slices are held. */
+    int failed = 0;
+    lsm_status first_status = LSM_OK;
+    lsm_err first_err;
+    lsm_err_clear(&first_err);
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1) ordered
+    for (size_t i = 0; i < gaps; ++i) {
+      lsm_gap_result buf;
+      memset(&buf, 0, sizeof buf);
+      lsm_err e;
+      lsm_err_clear(&e);
+      lsm_status ts = LSM_OK;
+      int stop;
+#pragma omp atomic read
+      stop = failed;
+      stack_run task = r;
+      lsm_slice_sink buffered = {&buf, buffer_emit};
+      task.sink = &buffered;
+      task.progress = NULL;
+      task.morph.threads = 1;
+      task.out = NULL;
+      task.image_phi = NULL;
+      if (!stop) {
+        task.out = lsm_alloc((size_t)width * (size_t)height, sizeof(float), &e, "output slice");
+        ts = task.out ? lsm_grid_create(width, height, (float)opts->pixel_size,
+                                        (float)opts->pixel_size, &task.image_phi, &e)
+                      : e.status;
+      }
+      if (!stop && ts == LSM_OK) ts = gap_task(&task, i, &plan[i], z0, dz, eps, &stats[i], &e);
+#pragma omp ordered
+      {
+        if (!failed && ts == LSM_OK) ts = buffer_replay(&r, &buf, &e);
+        if (!failed && ts != LSM_OK) {
+          first_status = ts;
+          first_err = e;
+#pragma omp atomic write
+          failed = 1;
+        }
+      }
+      lsm_gap_result_free(&buf);
+      lsm_grid_destroy(&task.image_phi);
+      free(task.out);
+    }
+    if (failed) {
+      st = first_status;
+      if (err && err->status == LSM_OK) *err = first_err;
+    }
+  }
+  /* The last input slice, if it lies on the output grid (written by rank 0). */
+  if (st == LSM_OK && (!distributed || opts->transport->rank == 0) && k < K &&
+      fabs(z0 + (double)k * dz - src->z[src->count - 1]) <= eps) {
+    slice last = {0};
+    st = slice_load(src, src->count - 1, width, height, opts->input, &last, err);
+    if (st == LSM_OK) st = emit_input(&r, &last, src->count - 1, z0 + (double)k * dz, err);
+    slice_free(&last);
+  }
+  free(plan);
   lsm_grid_destroy(&r.image_phi);
   free(r.out);
   return st;

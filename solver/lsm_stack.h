@@ -41,6 +41,7 @@ typedef enum lsm_method {
   LSM_METHOD_UNKNOWN = -1,
   LSM_METHOD_LS,    /* level-set morph */
   LSM_METHOD_BLEND, /* linear interpolation of the two signed distances */
+  LSM_METHOD_PLS,   /* level-set morph with the particle level set correction */
   LSM_METHOD_COUNT
 } lsm_method;
 
@@ -87,6 +88,7 @@ typedef struct lsm_stack_opts {
   double tol;          /* CP threshold (per-iteration mode, default 0.25) */
   int max_iter;        /* most solver steps per pair (default 100000) */
   lsm_morph_opts morph;
+  const struct lsm_gap_transport *transport; /* NULL: one process (see below) */
 } lsm_stack_opts;
 
 void lsm_stack_opts_default(lsm_stack_opts *opts);
@@ -121,7 +123,43 @@ typedef struct lsm_pair_stats {
   long long cells;        /* grid cells updated per iteration */
   size_t slices;          /* intermediate slices emitted */
   int hit_max_iter;       /* 1 if max_iter stopped the pair early */
+  /* --method pls (both morphs of a two-sided pair added up) */
+  long long pls_seeded;     /* particles seeded */
+  long long pls_discarded;  /* dropped by attraction (and leaving the grid) */
+  long long pls_escaped;    /* escaped particles, summed over steps */
+  long long pls_corrected;  /* grid values changed by corrections */
+  long long pls_steps;      /* corrections made (steps) */
+  int rank;                 /* the process (MPI rank) that ran the gap; 0 without MPI */
 } lsm_pair_stats;
+
+/* A finished gap on its way to the writing process: its output slices in
+ * order (phi: count * width * height floats), its statistics, or its error. */
+typedef struct lsm_gap_result {
+  lsm_status status;
+  char msg[LSM_ERR_MSG_MAX];
+  size_t count;
+  int width, height;
+  float *phi;
+  double *z;
+  long *input;
+  lsm_pair_stats stats;
+} lsm_gap_result;
+
+void lsm_gap_result_free(lsm_gap_result *g);
+
+/* Spreading the gaps over processes.  Gap i is computed by rank i % size;
+ * rank 0 computes its own gaps and receives the others' in stack order, and
+ * only rank 0 writes, so the output is the one a single process writes, byte
+ * for byte.  Implemented with MPI in solver/lsm_mpi.c (make MPI=1). */
+typedef struct lsm_gap_transport {
+  void *ctx;
+  int rank, size;
+  /* rank != 0: hands gap `gap` (or its error) to rank 0 */
+  lsm_status (*send)(void *ctx, size_t gap, const lsm_gap_result *result, lsm_err *err);
+  /* rank 0: receives gap `gap` from rank `from` into *result (allocated; free
+   * with lsm_gap_result_free) */
+  lsm_status (*recv)(void *ctx, size_t gap, int from, lsm_gap_result *result, lsm_err *err);
+} lsm_gap_transport;
 
 typedef struct lsm_progress {
   void *ctx;

@@ -4,8 +4,13 @@
 #define _XOPEN_SOURCE 700
 #include <errno.h>
 #include <ftw.h>
+#if defined(__GLIBC__) || defined(__linux__)
+#include <malloc.h>
+#endif
 #include <math.h>
 #include <omp.h>
+#include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,8 +19,12 @@
 #include <unistd.h>
 
 #include "io/lsm_io.h"
+#include "solver/lsm_backend.h"
 #include "solver/lsm_cli.h"
+#include "solver/lsm_mesh.h"
 #include "solver/lsm_metrics.h"
+#include "solver/lsm_mpi.h"
+#include "solver/lsm_preview.h"
 #include "solver/lsm_stack.h"
 
 static double wall_seconds(void) {
@@ -42,6 +51,56 @@ static void remove_tree(const char *path) {
   if (path && *path) nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 }
 
+/* ---- interruption: SIGINT, SIGTERM ------------------------------------------------------ */
+
+/* The signal that asked the run to stop, 0 while none has.  This is the one
+ * file-scope mutable variable of the program, and it has to be one: a signal
+ * handler receives no context pointer, and the only thing C (C17 7.14.1.1) and
+ * POSIX let it do with program state is store to a volatile sig_atomic_t.
+ * Everything else travels in values (lsm_err, the source, the sinks). */
+static volatile sig_atomic_t stop_signal = 0;
+
+static void on_stop_signal(int sig) { stop_signal = sig; }
+
+/* SIGINT and SIGTERM only set stop_signal; the run notices it before the next
+ * input or output slice (and before publishing) and unwinds through the normal
+ * error path, which removes the temporary folder.  SA_RESTART keeps writes in
+ * progress from failing with EINTR; SA_RESETHAND makes a second signal of the
+ * same kind take the default action at once (a stuck run can still be killed).
+ * A signal ignored when we started (a background job of a shell without job
+ * control) stays ignored. */
+static void install_stop_handlers(void) {
+  const int sigs[2] = {SIGINT, SIGTERM};
+  for (int k = 0; k < 2; ++k) {
+    struct sigaction old, sa;
+    if (sigaction(sigs[k], NULL, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART | SA_RESETHAND;
+    sigaction(sigs[k], &sa, NULL);
+  }
+}
+
+static const char *stop_signal_name(int sig) {
+  return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal";
+}
+
+/* LSM_ERR_INTERRUPTED once a stop signal has arrived. */
+static lsm_status check_stop(lsm_err *err) {
+  const int sig = stop_signal;
+  if (!sig) return LSM_OK;
+  return lsm_fail(err, LSM_ERR_INTERRUPTED, NULL, "interrupted by %s", stop_signal_name(sig));
+}
+
+/* A sink that checks for a stop signal before handing each slice to the real one. */
+static lsm_status stoppable_emit(void *ctx, const float *phi, int width, int height, double z,
+                                 long input_index, lsm_err *err) {
+  const lsm_slice_sink *inner = ctx;
+  LSM_TRY(check_stop(err));
+  return inner->emit(inner->ctx, phi, width, height, z, input_index, err);
+}
+
 /* ---- input: PNG slices ---------------------------------------------------------------- */
 
 typedef struct png_source {
@@ -52,6 +111,7 @@ typedef struct png_source {
 
 static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
   png_source *ps = ctx;
+  LSM_TRY(check_stop(err));
   return lsm_png_read_mask(ps->paths[index], &ps->read, out, err);
 }
 
@@ -60,23 +120,51 @@ static const char *png_name(void *ctx, size_t index) {
   return ps->paths[index];
 }
 
-/* ---- output: volume.nrrd, heights.txt, slices/ ------------------------------------------- */
+/* ---- output: volume.<ext>, heights.txt, slices/, surface.ply, previews ------------------ */
 
 typedef struct out_sink {
   char dir[4096];
   int write_slices;
-  lsm_nrrd_writer *nrrd;
+  lsm_volume_writer *volume; /* every --format */
+  lsm_mesh *mesh;            /* --mesh */
+  lsm_preview *preview;      /* unless --no-preview */
   FILE *heights;
   size_t count;
   double z_first, z_last;
   uint8_t *mask;
 } out_sink;
 
+/* The files written to OUT_DIR, in the order they are listed. */
+static size_t output_files(const lsm_cli *cli, const char **names, size_t cap) {
+  const char *vol[8];
+  size_t nv = lsm_volume_file_names(cli->formats, vol, 8);
+  size_t n = 0;
+#define ADD(name)                  \
+  do {                             \
+    if (n < cap) names[n] = name;  \
+    n++;                           \
+  } while (0)
+  for (size_t k = 0; k < nv && k < 8; ++k) ADD(vol[k]);
+  ADD("heights.txt");
+  if (cli->write_slices) ADD("slices/");
+  if (cli->mesh) ADD("surface.ply");
+  if (cli->preview) {
+    ADD("preview.png");
+    ADD("preview3d.png");
+  }
+  ADD("run.json");
+#undef ADD
+  return n;
+}
+
 static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, double z,
                             long input_index, lsm_err *err) {
-  (void)input_index;
   out_sink *s = ctx;
-  LSM_TRY(lsm_nrrd_write_slice(s->nrrd, phi, err));
+  /* the mesh and the previews need increasing heights: a repeated one adds nothing */
+  const int higher = s->count == 0 || z > s->z_last;
+  LSM_TRY(lsm_volume_writer_write_slice(s->volume, phi, z, err));
+  if (s->mesh && higher) LSM_TRY(lsm_mesh_add_slice(s->mesh, phi, z, err));
+  if (s->preview && higher) LSM_TRY(lsm_preview_add_slice(s->preview, phi, z, input_index, err));
   if (fprintf(s->heights, "%.17g\n", z) < 0)
     return lsm_fail(err, LSM_ERR_IO, "heights.txt", "write failed: %s", strerror(errno));
   if (s->count == 0) s->z_first = z;
@@ -150,7 +238,7 @@ static void json_number(FILE *f, double v) {
 static lsm_status write_run_json(const char *path, int argc, char **argv, const lsm_cli *cli,
                                  const png_source *src, const double *z, int width, int height,
                                  const out_sink *sink, const lsm_pair_stats *stats, int threads,
-                                 double wall, lsm_err *err) {
+                                 const lsm_backend *backend, double wall, lsm_err *err) {
   FILE *f = fopen(path, "w");
   if (!f) return lsm_fail(err, LSM_ERR_IO, path, "cannot create: %s", strerror(errno));
   const lsm_stack_opts *o = &cli->stack;
@@ -159,7 +247,14 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
     if (k) fputs(", ", f);
     json_string(f, argv[k]);
   }
-  fputs("],\n  \"options\": {\"method\": ", f);
+  fputs("],\n  \"backend\": {\"name\": ", f);
+  json_string(f, backend->ops->name);
+  fputs(", \"device\": ", f);
+  json_string(f, backend->device);
+  fputs(", \"build_seconds\": ", f);
+  json_number(f, backend->build_seconds);
+  fprintf(f, ", \"kernel_cache_hit\": %s},\n", backend->kernel_cache_hit ? "true" : "false");
+  fputs("  \"options\": {\"method\": ", f);
   json_string(f, lsm_method_name(o->method));
   fputs(", \"scheme\": ", f);
   json_string(f, lsm_scheme_name(o->morph.scheme));
@@ -194,7 +289,14 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   json_number(f, sink->z_first);
   fputs(", \"last_height\": ", f);
   json_number(f, sink->z_last);
-  fputs("},\n  \"pairs\": [\n", f);
+  fputs(", \"files\": [", f);
+  const char *files[16];
+  size_t nfiles = output_files(cli, files, 16);
+  for (size_t k = 0; k < nfiles && k < 16; ++k) {
+    if (k) fputs(", ", f);
+    json_string(f, files[k]);
+  }
+  fputs("]},\n  \"pairs\": [\n", f);
   long long iterations = 0, updates = 0;
   double seconds = 0.0;
   for (size_t k = 0; k + 1 < src->count; ++k) {
@@ -211,8 +313,16 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
     json_number(f, p->seconds);
     fprintf(f, ", \"cells\": %lld, \"t_final\": ", p->cells);
     json_number(f, p->t_final);
-    fprintf(f, ", \"slices\": %zu, \"hit_max_iter\": %s}%s\n", p->slices,
-            p->hit_max_iter ? "true" : "false", k + 2 < src->count ? "," : "");
+    fprintf(f, ", \"slices\": %zu, \"hit_max_iter\": %s, \"rank\": %d", p->slices,
+            p->hit_max_iter ? "true" : "false", p->rank);
+    if (o->method == LSM_METHOD_PLS) {
+      fprintf(f, ", \"particles\": {\"seeded\": %lld, \"discarded\": %lld, \"escaped_per_step\": ",
+              p->pls_seeded, p->pls_discarded);
+      json_number(f, p->pls_steps ? (double)p->pls_escaped / (double)p->pls_steps : 0.0);
+      fprintf(f, ", \"escaped\": %lld, \"corrected\": %lld, \"steps\": %lld}", p->pls_escaped,
+              p->pls_corrected, p->pls_steps);
+    }
+    fprintf(f, "}%s\n", k + 2 < src->count ? "," : "");
     iterations += p->iterations;
     updates += (long long)p->iterations * p->cells * lsm_time_stages(o->morph.time);
     seconds += p->seconds;
@@ -244,24 +354,42 @@ static lsm_status make_temp_dir(const char *out_dir, char *tmp, size_t size, lsm
   return LSM_OK;
 }
 
-/* Moves the finished tmp folder to out_dir, replacing an earlier result. */
+/* Moves the finished tmp folder to out_dir, replacing an earlier result.
+ * Where the system allows, the two are exchanged atomically (renameat2
+ * RENAME_EXCHANGE): out_dir is at every moment either the complete earlier
+ * result or the complete new one, and tmp then holds the earlier one, which is
+ * removed.  Elsewhere the earlier result is first renamed aside (out_dir is
+ * briefly absent) and put back if the new one cannot be moved in. */
 static lsm_status publish(const char *tmp, const char *out_dir, lsm_err *err) {
   struct stat st;
   if (stat(out_dir, &st) == 0) {
     if (!S_ISDIR(st.st_mode)) return lsm_fail(err, LSM_ERR_INPUT, out_dir, "exists and is not a folder");
+    if (lsm_rename_exchange(tmp, out_dir) == 0) {
+      remove_tree(tmp);
+      return LSM_OK;
+    }
+    if (errno != ENOSYS && errno != EINVAL
+#ifdef ENOTSUP
+        && errno != ENOTSUP
+#endif
+    )
+      return lsm_fail(err, LSM_ERR_IO, out_dir, "cannot replace: %s", strerror(errno));
     char old[4200];
     snprintf(old, sizeof old, "%s.old-XXXXXX", tmp);
     if (!mkdtemp(old)) return lsm_fail(err, LSM_ERR_IO, out_dir, "cannot replace: %s", strerror(errno));
     char old_out[4300];
     snprintf(old_out, sizeof old_out, "%s/previous", old);
     if (rename(out_dir, old_out) != 0) {
+      int e = errno;
       remove_tree(old);
-      return lsm_fail(err, LSM_ERR_IO, out_dir, "cannot replace: %s", strerror(errno));
+      return lsm_fail(err, LSM_ERR_IO, out_dir, "cannot replace: %s", strerror(e));
     }
     if (rename(tmp, out_dir) != 0) {
       int e = errno;
-      if (rename(old_out, out_dir) != 0) { /* keep the old result where it was */
-      }
+      if (rename(old_out, out_dir) != 0) /* never delete the earlier result: say where it is */
+        return lsm_fail(err, LSM_ERR_IO, out_dir,
+                        "cannot move the result into place (%s); the earlier result is in %s",
+                        strerror(e), old_out);
       remove_tree(old);
       return lsm_fail(err, LSM_ERR_IO, out_dir, "cannot move the result into place: %s", strerror(e));
     }
@@ -273,7 +401,175 @@ static lsm_status publish(const char *tmp, const char *out_dir, lsm_err *err) {
   return LSM_OK;
 }
 
-static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
+/* Longest slice side accepted: keeps every canvas size of the stack driver
+ * (the image plus alignment margins, at most three times a side) within an int. */
+#define LSM_SIDE_MAX (1 << 24)
+
+/* Checks made before anything is allocated for the run or written:
+ * the output path, the heights, every slice header (PNG signature and IHDR:
+ * all slices the same size), and the resource limits: pixels per slice
+ * (--max-pixels), the longest side, the working canvas of an aligned gap and
+ * the voxels of the output volume (--max-voxels).  All sizes are computed in
+ * 64-bit or double arithmetic, so nothing can wrap around.  On success
+ * *width x *height is the slice size. */
+static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const double *z,
+                               int *width, int *height, lsm_err *err) {
+  struct stat sb, in;
+  if (stat(cli->out_dir, &sb) == 0) {
+    if (!S_ISDIR(sb.st_mode))
+      return lsm_fail(err, LSM_ERR_INPUT, cli->out_dir, "exists and is not a folder");
+    /* OUT is replaced as a whole: it must not be, or contain, the input folder. */
+    char *out_real = realpath(cli->out_dir, NULL), *in_real = realpath(cli->slice_dir, NULL);
+    int clash = stat(cli->slice_dir, &in) == 0 && in.st_dev == sb.st_dev && in.st_ino == sb.st_ino;
+    if (out_real && in_real) {
+      size_t n = strlen(out_real);
+      if (strncmp(in_real, out_real, n) == 0 && (in_real[n] == '/' || in_real[n] == '\0' ||
+                                                 (n == 1 && out_real[0] == '/')))
+        clash = 1;
+    }
+    free(out_real);
+    free(in_real);
+    if (clash)
+      return lsm_fail(err, LSM_ERR_INPUT, cli->out_dir,
+                      "is or contains the input folder %s, which replacing it would delete",
+                      cli->slice_dir);
+  }
+  for (size_t k = 0; k < src->count; ++k) {
+    if (!isfinite(z[k]))
+      return lsm_fail(err, LSM_ERR_INPUT, cli->heights_file ? cli->heights_file : cli->slice_dir,
+                      "height of slice %zu is not finite (--spacing %g)", k + 1, cli->spacing);
+    if (k > 0 && !(z[k] > z[k - 1]))
+      return lsm_fail(err, LSM_ERR_INPUT, cli->heights_file ? cli->heights_file : cli->slice_dir,
+                      "heights of slices %zu and %zu are not increasing", k, k + 1);
+  }
+  int w = 0, h = 0;
+  for (size_t k = 0; k < src->count; ++k) {
+    LSM_TRY(check_stop(err));
+    int wk = 0, hk = 0;
+    LSM_TRY(lsm_png_read_header(src->paths[k], cli->max_pixels, &wk, &hk, err));
+    if (k == 0) {
+      w = wk;
+      h = hk;
+      const uint64_t pixels = (uint64_t)w * (uint64_t)h; /* both < 2^31: no overflow */
+      if (pixels > cli->max_pixels)
+        return lsm_fail(err, LSM_ERR_LIMIT, src->paths[0],
+                        "%dx%d = %llu pixels is more than --max-pixels %llu", w, h,
+                        (unsigned long long)pixels, (unsigned long long)cli->max_pixels);
+      if (w > LSM_SIDE_MAX || h > LSM_SIDE_MAX)
+        return lsm_fail(err, LSM_ERR_LIMIT, src->paths[0],
+                        "%dx%d: a side longer than %d pixels is not supported", w, h,
+                        LSM_SIDE_MAX);
+    } else if (wk != w || hk != h) {
+      return lsm_fail(err, LSM_ERR_INPUT, src->paths[k], "slice is %dx%d but %s is %dx%d", wk,
+                      hk, base_name(src->paths[0]), w, h);
+    }
+  }
+  if (cli->stack.align != LSM_ALIGN_NONE) {
+    const uint64_t l = (uint64_t)(w > h ? w : h), canvas = ((uint64_t)w + l) * ((uint64_t)h + l);
+    if (canvas / 4 > cli->max_pixels)
+      return lsm_fail(err, LSM_ERR_LIMIT, src->paths[0],
+                      "%dx%d slices need a working canvas of up to %llu cells with --align %s, "
+                      "more than 4 x --max-pixels %llu (use --align none or raise --max-pixels)",
+                      w, h, (unsigned long long)canvas, lsm_align_name(cli->stack.align),
+                      (unsigned long long)cli->max_pixels);
+  }
+  if (!cli->stack.per_iteration) {
+    const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
+    const double slices = floor((z[src->count - 1] - z[0]) / dz + 1e-6) + 1.0;
+    const double voxels = slices * (double)w * (double)h;
+    if (!(voxels <= (double)cli->max_voxels))
+      return lsm_fail(err, LSM_ERR_LIMIT, cli->heights_file ? cli->heights_file : cli->slice_dir,
+                      "the output would have %.4g slices of %dx%d = %.4g voxels, more than "
+                      "--max-voxels %llu (raise --dz or --max-voxels)",
+                      slices, w, h, voxels, (unsigned long long)cli->max_voxels);
+  }
+  *width = w;
+  *height = h;
+  return LSM_OK;
+}
+
+/* A numerical failure names the iteration; add the gap (the pair of input
+ * files) it happened in: the last pair whose statistics the stack started. */
+static void name_failed_pair(lsm_err *err, const png_source *src, const lsm_pair_stats *stats) {
+  if (!err || !stats) return;
+  size_t pair = SIZE_MAX;
+  for (size_t k = 0; k + 1 < src->count; ++k)
+    if (stats[k].target == k + 1) pair = k;
+  if (pair == SIZE_MAX) return;
+  char what[LSM_ERR_MSG_MAX];
+  memcpy(what, err->msg, sizeof what);
+  what[sizeof what - 1] = '\0';
+  int n = snprintf(err->msg, sizeof err->msg, "%s -> %s (gap %zu of %zu): ", src->paths[pair],
+                   base_name(src->paths[pair + 1]), pair + 1, src->count - 1);
+  if (n > 0 && (size_t)n < sizeof err->msg)
+    snprintf(err->msg + n, sizeof err->msg - (size_t)n, "%s; try a smaller --cfl", what);
+}
+
+/* Messages about files of the removed temporary folder name them under OUT_DIR
+ * ("out/volume.nrrd: write failed: ..."), where the user will look for them. */
+static void name_out_not_tmp(lsm_err *err, const char *tmp, const char *out_dir) {
+  if (!err || !*tmp) return;
+  const char *at = strstr(err->msg, tmp);
+  if (!at) return;
+  char msg[LSM_ERR_MSG_MAX];
+  const size_t before = (size_t)(at - err->msg);
+  size_t len = strlen(out_dir); /* as make_temp_dir: without trailing slashes */
+  while (len > 1 && out_dir[len - 1] == '/') --len;
+  snprintf(msg, sizeof msg, "%.*s%.*s%s", (int)before, err->msg, (int)len, out_dir,
+           at + strlen(tmp));
+  memcpy(err->msg, msg, sizeof msg);
+}
+
+/* An MPI rank other than 0: computes its share of the gaps and sends them to
+ * rank 0, which reads the same input, checks it, and writes everything. */
+static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *transport,
+                                     lsm_err *err) {
+  png_source src = {NULL, 0, {cli->invert, cli->max_pixels}};
+  double *z = NULL;
+  size_t nz = 0;
+  lsm_pair_stats *stats = NULL;
+  lsm_backend *backend = NULL;
+  int width = 0, height = 0;
+  lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, err);
+  if (st == LSM_OK && src.count < 2)
+    st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "need at least two PNG slices");
+  if (st == LSM_OK) {
+    if (cli->heights_file) {
+      st = lsm_heights_read(cli->heights_file, &z, &nz, err);
+      if (st == LSM_OK && nz != src.count)
+        st = lsm_fail(err, LSM_ERR_INPUT, cli->heights_file, "%zu heights for %zu slices", nz,
+                      src.count);
+    } else {
+      z = lsm_alloc(src.count, sizeof *z, err, "heights");
+      if (!z) st = err->status;
+      for (size_t k = 0; z && k < src.count; ++k) z[k] = (double)k * cli->spacing;
+    }
+  }
+  if (st == LSM_OK) st = lsm_png_read_size(src.paths[0], &width, &height, err);
+  const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
+  cli->stack.morph.threads = threads;
+  if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
+  if (st == LSM_OK) {
+    cli->stack.morph.backend = backend;
+    cli->stack.transport = transport;
+    stats = calloc(src.count, sizeof *stats);
+    if (!stats) st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the run");
+  }
+  if (st == LSM_OK) {
+    lsm_slice_source source = {&src, src.count, z, png_load, png_name};
+    st = lsm_stack_run(&source, width, height, &cli->stack, NULL, stats, NULL, err);
+  }
+  lsm_backend_close(&backend);
+  free(stats);
+  free(z);
+  lsm_path_list_free(src.paths, src.count);
+  return st;
+}
+
+static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *mpi,
+                              lsm_err *err) {
+  if (lsm_mpi_rank(mpi) != 0) return reconstruct_worker(cli, lsm_mpi_transport(mpi), err);
+  cli->stack.transport = lsm_mpi_transport(mpi);
   const double t_start = wall_seconds();
   png_source src = {NULL, 0, {cli->invert, cli->max_pixels}};
   double *z = NULL;
@@ -300,12 +596,16 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, lsm_err *err)
     }
   }
   int width = 0, height = 0;
-  if (st == LSM_OK) st = lsm_png_read_size(src.paths[0], &width, &height, err);
-  if (st == LSM_OK && (uint64_t)width * (uint64_t)height > cli->max_pixels)
-    st = lsm_fail(err, LSM_ERR_LIMIT, src.paths[0], "%dx%d pixels is more than --max-pixels %llu",
-                  width, height, (unsigned long long)cli->max_pixels);
+  if (st == LSM_OK) st = check_inputs(cli, &src, z, &width, &height, err);
   const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
   cli->stack.morph.threads = threads;
+  lsm_backend *backend = NULL;
+  if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
+  if (st == LSM_OK) {
+    cli->stack.morph.backend = backend;
+    if (!cli->quiet && cli->backend != LSM_BACKEND_C)
+      fprintf(stderr, "lsmorph: backend %s: %s\n", backend->ops->name, backend->device);
+  }
   if (st == LSM_OK) {
     stats = calloc(src.count, sizeof *stats);
     sink.mask = malloc((size_t)width * (size_t)height);
@@ -318,8 +618,12 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, lsm_err *err)
     sink.write_slices = cli->write_slices;
     const double pixel = cli->stack.pixel_size;
     const double dz = cli->stack.dz > 0 ? cli->stack.dz : pixel;
-    snprintf(path, sizeof path, "%s/volume.nrrd", tmp);
-    st = lsm_nrrd_open(path, width, height, pixel, pixel, dz, 0.0, 0.0, z[0], &sink.nrrd, err);
+    st = lsm_volume_writer_open(tmp, cli->formats, (lsm_values)cli->values, width, height, pixel,
+                                pixel, dz, 0.0, 0.0, z[0], &sink.volume, err);
+    if (st == LSM_OK && cli->mesh)
+      st = lsm_mesh_open(width, height, pixel, pixel, dz, &sink.mesh, err);
+    if (st == LSM_OK && cli->preview)
+      st = lsm_preview_open(width, height, pixel, pixel, dz, &sink.preview, err);
     if (st == LSM_OK) {
       snprintf(path, sizeof path, "%s/heights.txt", tmp);
       sink.heights = fopen(path, "w");
@@ -338,15 +642,31 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, lsm_err *err)
     lsm_progress progress = {&ps, progress_update};
     lsm_slice_source source = {&src, src.count, z, png_load, png_name};
     lsm_slice_sink out = {&sink, sink_emit};
-    st = lsm_stack_run(&source, width, height, &cli->stack, &out, stats,
+    lsm_slice_sink stoppable = {&out, stoppable_emit};
+    st = lsm_stack_run(&source, width, height, &cli->stack, &stoppable, stats,
                        cli->quiet ? NULL : &progress, err);
+    if (st == LSM_ERR_NUMERIC) name_failed_pair(err, &src, stats);
   }
   if (st == LSM_OK) {
     double sz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
     if (cli->stack.per_iteration && sink.count > 1)
       sz = (sink.z_last - sink.z_first) / (double)(sink.count - 1);
-    st = lsm_nrrd_finish(&sink.nrrd, sz, err);
+    st = lsm_volume_writer_finish(&sink.volume, sz, sink.count, err);
   }
+  if (st == LSM_OK && sink.mesh) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/surface.ply", tmp);
+    st = lsm_mesh_close(sink.mesh, err);
+    if (st == LSM_OK) st = lsm_mesh_write_ply(sink.mesh, path, err);
+  }
+  lsm_mesh_free(&sink.mesh);
+  if (st == LSM_OK && sink.preview) {
+    char montage[4200], render[4200];
+    snprintf(montage, sizeof montage, "%s/preview.png", tmp);
+    snprintf(render, sizeof render, "%s/preview3d.png", tmp);
+    st = lsm_preview_write(sink.preview, montage, render, err);
+  }
+  lsm_preview_free(&sink.preview);
   if (sink.heights) {
     int bad = ferror(sink.heights);
     if (fclose(sink.heights) != 0 || bad)
@@ -357,8 +677,9 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, lsm_err *err)
     char path[4200];
     snprintf(path, sizeof path, "%s/run.json", tmp);
     st = write_run_json(path, argc, argv, cli, &src, z, width, height, &sink, stats, threads,
-                        wall_seconds() - t_start, err);
+                        backend, wall_seconds() - t_start, err);
   }
+  if (st == LSM_OK) st = check_stop(err); /* a signal now still means no result */
   if (st == LSM_OK) st = publish(tmp, cli->out_dir, err);
   if (st == LSM_OK) {
     if (!cli->quiet) {
@@ -367,14 +688,22 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, lsm_err *err)
       if (capped)
         fprintf(stderr, "lsmorph: note: %d gaps stopped at --max-iter %d before finishing\n",
                 capped, cli->stack.max_iter);
-      fprintf(stderr, "lsmorph: wrote %zu slices to %s (volume.nrrd, heights.txt%s, run.json) in %.2f s\n",
-              sink.count, cli->out_dir, cli->write_slices ? ", slices/" : "",
-              wall_seconds() - t_start);
+      const char *files[16];
+      size_t nfiles = output_files(cli, files, 16);
+      fprintf(stderr, "lsmorph: wrote %zu slices to %s (", sink.count, cli->out_dir);
+      for (size_t k = 0; k < nfiles && k < 16; ++k) fprintf(stderr, "%s%s", k ? ", " : "", files[k]);
+      fprintf(stderr, ") in %.2f s\n", wall_seconds() - t_start);
     }
   } else {
-    lsm_nrrd_abort(&sink.nrrd);
-    if (*tmp) remove_tree(tmp);
+    lsm_volume_writer_abort(&sink.volume);
+    lsm_mesh_free(&sink.mesh);
+    lsm_preview_free(&sink.preview);
+    if (*tmp) {
+      remove_tree(tmp);
+      name_out_not_tmp(err, tmp, cli->out_dir);
+    }
   }
+  lsm_backend_close(&backend);
   free(sink.mask);
   free(stats);
   free(z);
@@ -388,6 +717,12 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   char **truth = NULL;
   size_t n = 0;
   LSM_TRY(lsm_dir_list_png(cli->truth_dir, &truth, &n, err));
+  if (n <= (size_t)cli->stride) { /* nothing held out between two inputs */
+    lsm_path_list_free(truth, n);
+    return lsm_fail(err, LSM_ERR_INPUT, cli->truth_dir,
+                    "%zu PNG files: --stride %d needs at least %d to hold any out", n, cli->stride,
+                    cli->stride + 1);
+  }
   lsm_png_read_opts ro = {0, (uint64_t)1 << 28};
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, pool_n = 0, pool_cap = 0;
@@ -433,12 +768,12 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   return LSM_OK;
 }
 
-int main(int argc, char **argv) {
+static int run(int argc, char **argv, const lsm_mpi *mpi) {
   lsm_cli cli;
   lsm_err err;
   lsm_err_clear(&err);
   if (lsm_cli_parse(argc, argv, &cli, &err) != LSM_OK) {
-    fprintf(stderr, "lsmorph: error: %s\n", err.msg);
+    if (lsm_mpi_rank(mpi) == 0) fprintf(stderr, "lsmorph: error: %s\n", err.msg);
     return 2;
   }
   lsm_status st = LSM_OK;
@@ -450,7 +785,11 @@ int main(int argc, char **argv) {
     printf("lsmorph %s\n", LSM_VERSION);
     return 0;
   case LSM_CMD_RECONSTRUCT:
-    st = reconstruct(argc, argv, &cli, &err);
+    install_stop_handlers();
+    st = reconstruct(argc, argv, &cli, mpi, &err);
+    break;
+  case LSM_CMD_DEVICES:
+    st = lsm_backend_list_devices(stdout, &err);
     break;
   case LSM_CMD_SCORE:
     st = score(&cli, &err);
@@ -459,9 +798,45 @@ int main(int argc, char **argv) {
     lsm_cli_help(stderr, NULL);
     return 2;
   }
+  const int sig = stop_signal;
+  if (st != LSM_OK && sig) {
+    /* Whatever failed on the way out was caused by the signal: say so, then end
+     * by that signal (exit status 128 + N in a shell: 130 for SIGINT, 143 for
+     * SIGTERM), so that a calling shell script stops too. */
+    fprintf(stderr, "lsmorph: error: %s: interrupted by %s; no result was written%s\n",
+            cli.out_dir ? cli.out_dir : "lsmorph", stop_signal_name(sig),
+            cli.out_dir ? " (an earlier result there is unchanged)" : "");
+    signal(sig, SIG_DFL);
+    raise(sig);
+    return 128 + sig;
+  }
   if (st != LSM_OK) {
-    fprintf(stderr, "lsmorph: error: %s\n", err.msg[0] ? err.msg : lsm_status_name(st));
+    if (lsm_mpi_rank(mpi) == 0) /* other MPI ranks: rank 0 reports for all */
+      fprintf(stderr, "lsmorph: error: %s\n", err.msg[0] ? err.msg : lsm_status_name(st));
     return st == LSM_ERR_USAGE ? 2 : 1;
   }
   return 0;
+}
+
+int main(int argc, char **argv) {
+#if defined(M_MMAP_THRESHOLD)
+  /* Keep freed grids in the heap: every gap allocates and frees tens of MB of
+   * grids, and returning them to the kernel costs a page fault per page on
+   * the next gap (about a fifth of the run time on 512^2 slices). */
+  mallopt(M_MMAP_THRESHOLD, 1 << 30);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
+#endif
+  lsm_mpi *mpi = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  if (lsm_mpi_init(&argc, &argv, &mpi, &err) != LSM_OK) {
+    fprintf(stderr, "lsmorph: error: %s\n", err.msg);
+    return 1;
+  }
+  const int rc = run(argc, argv, mpi);
+  /* With several ranks, rank 0 has reported the error and removed its
+   * temporary output: end the other ranks too (they may be waiting to send). */
+  if (rc != 0 && lsm_mpi_size(mpi) > 1 && lsm_mpi_rank(mpi) == 0) lsm_mpi_abort(mpi, rc);
+  lsm_mpi_finalize(&mpi);
+  return rc;
 }

@@ -32,3 +32,11 @@ PYEOF
   echo "$n slices: peak RSS $kb KiB, $(printf %.2f "$sec") s"
 done
 awk -v a="$(cut -d' ' -f1 "$TMP/rss10.txt")" -v b="$(cut -d' ' -f1 "$TMP/rss60.txt")" 'BEGIN { r = b / a; printf "peak(60) / peak(10) = %.3f (target <= 1.25): %s\n", r, (r <= 1.25 ? "PASS" : "FAIL") }'
+
+echo
+sh tests/bench_gaps.sh "$BUILD"
+echo
+sh tests/bench_pls.sh "$BUILD"
+echo
+echo "== OpenCL backend vs C (bench_opencl; load: $(uptime | sed 's/.*load average/load average/')) =="
+"$BUILD"/bench/bench_opencl || echo "bench_opencl: no OpenCL device, skipped"

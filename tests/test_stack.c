@@ -566,11 +566,12 @@ static void test_align(void **state) {
 /* outline input, nested contours                                            */
 
 static void check_one_hole(const run *r, const char *what) {
-  char text[64] = "";
+  char text[512] = ""; /* " c/h" per slice; bounded (it overflowed 64 bytes: ASan) */
   for (size_t k = 0; k < r->sink.n; ++k) {
     const float *phi = r->sink.s[k].phi;
     const int nh = holes(phi, W, H), nc = fg_components(phi, W, H);
-    sprintf(text + strlen(text), " %d/%d", nc, nh);
+    const size_t used = strlen(text);
+    snprintf(text + used, sizeof text - used, " %d/%d", nc, nh);
     if (nh != 1 || nc != 1)
       fail_msg("%s: slice z = %g has %d components and %d holes (want 1 and 1)", what,
                r->sink.s[k].z, nc, nh);

@@ -1,0 +1,313 @@
+#!/bin/sh
+# Bad input, limits, interruption and write errors, end to end.
+#   sh tests/test_errors.sh BUILD_DIR
+# Every failing run must exit 1 (bad input, runtime failure) or 2 (usage),
+# print "lsmorph: error: <file>: <what>" naming the file and the problem, and
+# leave neither OUT nor a temporary folder OUT.tmp-* behind; an earlier OUT must
+# survive any failed or interrupted run unchanged.  Slices come from
+# tests/make_png.py (every PNG colour type and bit depth, and broken files) and
+# tests/make_stack.py.  Prints one line per failed check and
+# "errors: N passed, N failed".
+set -u
+BUILD=${1:-build}
+LSM="$BUILD/lsmorph"
+PY=${PYTHON:-/usr/bin/python3}
+pass=0
+fail=0
+
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "errors: FAIL: $*"; }
+finish() {
+  echo "errors: $pass passed, $fail failed"
+  [ "$fail" -eq 0 ]
+  exit
+}
+
+[ -x "$LSM" ] || { bad "$LSM is missing (run make first)"; finish; }
+command -v "$PY" >/dev/null 2>&1 || PY=python3
+command -v "$PY" >/dev/null 2>&1 || { bad "python3 is needed to make test PNGs"; finish; }
+
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-errors.XXXXXX") || exit 1
+FULL="" # a tiny tmpfs for the disk-full test (root only)
+trap '[ -n "$FULL" ] && umount "$FULL" 2>/dev/null; rm -rf "$TMP"' EXIT
+trap 'exit 1' INT TERM
+cd "$TMP" || exit 1
+case $LSM in /*) ;; *) LSM="$OLDPWD/$LSM" ;; esac
+TESTS=$OLDPWD/tests
+
+png() { "$PY" "$TESTS/make_png.py" "$@" || bad "make_png.py $*"; }
+# leftovers: true when a temporary result folder is left anywhere in TMP.
+leftovers() {
+  for f in "$TMP"/*.tmp-* "$TMP"/*/*.tmp-*; do
+    [ -e "$f" ] && return 0
+  done
+  return 1
+}
+# fingerprint DIR: a checksum of every file under DIR (to see it unchanged).
+fingerprint() { (cd "$1" && find . -type f | LC_ALL=C sort | xargs cksum) 2>/dev/null | cksum; }
+# inside NRRD: cells with phi <= 0 over the whole volume (float32 after 512 bytes).
+inside() {
+  od -An -v -tf4 -j 512 "$1" | awk '{ for (i = 1; i <= NF; i++) if ($i + 0 <= 0) n++ } END { print n + 0 }'
+}
+
+# expect DESC RC PHRASE OUT ARG...: "lsmorph ARG..." exits RC, its message
+# starts with "lsmorph: error: " and contains PHRASE (a fixed string, usually
+# "<file>: <what>"), and it leaves no OUT (unless OUT is "-") and no temporary folder.
+expect() {
+  desc=$1 want=$2 phrase=$3 out=$4
+  shift 4
+  "$LSM" "$@" >"$TMP/stdout" 2>"$TMP/stderr"
+  rc=$?
+  msg=$(cat "$TMP/stderr")
+  if [ "$rc" -eq "$want" ]; then ok; else bad "$desc: exit $rc, expected $want ($msg)"; fi
+  if grep -q "^lsmorph: error: " "$TMP/stderr" && grep -q -F -e "$phrase" "$TMP/stderr"; then
+    ok
+  else
+    bad "$desc: message does not say '$phrase': $msg"
+  fi
+  if [ "$out" != "-" ]; then
+    if [ -e "$out" ]; then bad "$desc: $out was created"; else ok; fi
+  fi
+  if leftovers; then bad "$desc: a temporary folder was left: $(ls -d "$TMP"/*.tmp-* 2>&1)"; else ok; fi
+  rm -rf "$TMP"/*.tmp-*
+}
+
+# ---- good slices: 3 discs of 32x32 -------------------------------------------------------
+mkdir good
+for i in 1 2 3; do png gray8 "good/$i.png" 32 $((3 + 2 * i)); done
+
+# ---- folders -------------------------------------------------------------------------------
+expect "missing folder" 1 "nope: no such folder" out reconstruct nope -o out -q
+mkdir empty
+expect "empty folder" 1 "empty: no PNG files" out reconstruct empty -o out -q
+mkdir textonly && echo "not slices" >textonly/notes.txt
+expect "folder without PNG files" 1 "textonly: no PNG files" out reconstruct textonly -o out -q
+echo "a file" >afile
+expect "SLICE_DIR is a file" 1 "afile: not a folder" out reconstruct afile -o out -q
+mkdir one && cp good/1.png one/
+expect "a single slice" 1 "one: only one slice" out reconstruct one -o out -q
+
+# ---- broken PNG files: each the second of two slices -------------------------------------------
+broken() { # broken KIND PHRASE
+  rm -rf "b-$1" && mkdir "b-$1" && cp good/1.png "b-$1/1.png"
+  png "$1" "b-$1/2.png" 32
+  expect "PNG $1" 1 "b-$1/2.png: $2" out reconstruct "b-$1" -o out -q
+}
+broken text "not a PNG file"
+broken zero "empty file, not a PNG file"
+broken truncated "truncated PNG file"
+broken no_iend "truncated PNG file"
+broken bad_crc "corrupt PNG: IHDR: CRC error"
+broken bad_idat_crc "corrupt PNG: IDAT: CRC error"
+broken bad_zlib "corrupt PNG"
+
+mkdir sizes && cp good/1.png good/2.png sizes/ && png gray8 sizes/3.png 40
+expect "slices of different sizes" 1 "sizes/3.png: slice is 40x40 but 1.png is 32x32" out reconstruct sizes -o out -q
+
+# ---- resource limits ----------------------------------------------------------------------------
+# A valid signature and IHDR of 200000 x 200000 pixels (CRC right) and nothing else:
+# refused from the header, at once, with the limit message.
+mkdir huge && png huge huge/1.png && png huge huge/2.png
+t0=$(date +%s)
+expect "200000x200000 header" 1 "huge/1.png: image is 200000x200000 = 40000000000 pixels, more than the limit" out reconstruct huge -o out -q
+t1=$(date +%s)
+if [ $((t1 - t0)) -le 2 ]; then ok; else bad "200000x200000 header took $((t1 - t0)) s to refuse"; fi
+# the same header followed by a short IDAT and IEND
+mkdir huge2 && png huge_idat huge2/1.png && png huge_idat huge2/2.png
+expect "200000x200000 with IDAT" 1 "huge2/1.png: image is 200000x200000" out reconstruct huge2 -o out -q
+expect "--max-pixels" 1 "good/1.png: image is 32x32 = 1024 pixels, more than the limit of 1000" out \
+  reconstruct good -o out -q --max-pixels 1000
+expect "--max-voxels" 1 "more than --max-voxels 3000" out reconstruct good -o out -q --max-voxels 3000
+expect "output slice count overflow" 1 "more than --max-voxels" out reconstruct good -o out -q --dz 1e-300
+# a 20000x1 strip: with alignment its working canvas would be 40000 x 20001 cells
+mkdir strip && png gray8 strip/1.png 20000x1 3 && png gray8 strip/2.png 20000x1 5
+expect "aligned canvas of a long strip" 1 "strip/1.png: 20000x1 slices need a working canvas" out \
+  reconstruct strip -o out -q --max-pixels 100000
+"$LSM" reconstruct strip -o out-strip -q --max-pixels 100000 --align none >/dev/null 2>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ]; then ok; else bad "the strip with --align none: exit $rc ($(cat "$TMP/stderr"))"; fi
+
+# ---- heights --------------------------------------------------------------------------------------
+heights() { # heights DESC TEXT PHRASE
+  printf '%b' "$2" >h.txt
+  expect "heights: $1" 1 "h.txt: $3" out reconstruct good -o out -q --heights h.txt
+}
+heights "wrong count" '0\n1\n' "2 heights for 3 slices"
+heights "too many" '0\n1\n2\n3\n' "4 heights for 3 slices"
+heights "not increasing" '0\n2\n1\n' "line 3: 1 is not greater than the previous height 2"
+heights "repeated" '0\n1\n1\n' "line 3: 1 is not greater than the previous height 1"
+heights "nan" '0\nnan\n2\n' 'line 2: "nan" is not a number'
+heights "inf" '0\n1\ninf\n' 'line 3: "inf" is not a number'
+heights "junk" '0\n1 mm\n2\n' 'line 2: "1 mm" is not a number'
+heights "out of range" '0\n1e999\n2e999\n' 'line 2: "1e999" is out of range'
+heights "empty" '# only a comment\n\n' "no heights"
+expect "heights file missing" 1 "nothere.txt: cannot open" out reconstruct good -o out -q --heights nothere.txt
+expect "--spacing overflows the heights" 1 "height of slice 3 is not finite" out reconstruct good -o out -q --spacing 1e308
+
+# ---- usage errors: exit 2 -------------------------------------------------------------------------------
+expect "--spacing 0" 2 "--spacing: 0 must be positive" out reconstruct good -o out --spacing 0
+expect "--spacing -1" 2 "--spacing: -1 must be positive" out reconstruct good -o out --spacing -1
+expect "--spacing nan" 2 "--spacing: 'nan' is not a number" out reconstruct good -o out --spacing nan
+expect "--spacing inf" 2 "--spacing: 'inf' is not a number" out reconstruct good -o out --spacing inf
+expect "--spacing junk" 2 "--spacing: '2mm' is not a number" out reconstruct good -o out --spacing 2mm
+expect "--pixel-size 0" 2 "--pixel-size: 0 must be positive" out reconstruct good -o out --pixel-size 0
+expect "--pixel-size -0.5" 2 "--pixel-size: -0.5 must be positive" out reconstruct good -o out --pixel-size=-0.5
+expect "--dz 0" 2 "--dz: 0 must be positive" out reconstruct good -o out --dz 0
+expect "--dz -1" 2 "--dz: -1 must be positive" out reconstruct good -o out --dz -1
+expect "unknown option" 2 "unknown option '--frobnicate'" out reconstruct good -o out --frobnicate
+expect "unknown option value" 2 "--method: 'magic' is not one of" out reconstruct good -o out --method magic
+expect "bad --threads" 2 "--threads: 0 is out of range" out reconstruct good -o out --threads 0
+expect "bad --max-pixels" 2 "--max-pixels: '1.5' is not a whole number" out reconstruct good -o out --max-pixels 1.5
+expect "bad --max-voxels" 2 "--max-voxels: -3 must be positive" out reconstruct good -o out --max-voxels -3
+expect "flag with a value" 2 "--invert takes no value" out reconstruct good -o out --invert=yes
+expect "option without its value" 2 "-o needs a value" - reconstruct good -o
+expect "missing -o" 2 "missing -o OUT_DIR" - reconstruct good
+expect "unknown command" 2 "unknown command 'rebuild'" - rebuild good -o out
+
+# ---- score ----------------------------------------------------------------------------------------------
+expect "score: no truth slices" 1 "empty: 0 PNG files: --stride 2 needs at least 3" - score empty ref --stride 2
+expect "score: nothing held out" 1 "good: 3 PNG files: --stride 3 needs at least 4" - score good ref --stride 3
+expect "score: missing result" 1 "nothing/slices/00002.png: cannot open" - score good nothing --stride 2
+expect "score: bad --stride" 2 "--stride: 1 is out of range" - score good ref --stride 1
+
+# ---- output path ------------------------------------------------------------------------------------------
+expect "OUT under a regular file" 1 "afile/out: cannot create a folder next to it: Not a directory" \
+  afile/out reconstruct good -o afile/out -q
+sum=$(cksum <afile)
+expect "OUT is a regular file" 1 "afile: exists and is not a folder" - reconstruct good -o afile -q
+if [ "$(cksum <afile)" = "$sum" ]; then ok; else bad "OUT as a regular file was changed"; fi
+if [ "$(id -u)" -ne 0 ]; then
+  mkdir locked && chmod 555 locked
+  expect "OUT not writable" 1 "locked/out: cannot create a folder next to it: Permission denied" \
+    locked/out reconstruct good -o locked/out -q
+  chmod 755 locked
+else # root may write anywhere; /proc takes no new folders even from root
+  expect "OUT not writable" 1 "/proc/lsmorph-out: cannot create a folder next to it" \
+    /proc/lsmorph-out reconstruct good -o /proc/lsmorph-out -q
+fi
+sum=$(fingerprint good)
+expect "OUT is the input folder" 1 "good: is or contains the input folder" - reconstruct good -o good -q
+expect "OUT contains the input folder" 1 "is or contains the input folder good" - reconstruct good -o . -q
+if [ "$(fingerprint good)" = "$sum" ]; then ok; else bad "the input folder was changed"; fi
+
+# ---- numerical blow-up: named with the pair and the iteration ------------------------------------------------
+expect "CFL blow-up" 1 "good/1.png -> 2.png (gap 1 of 2): iteration" out \
+  reconstruct good -o out -q --per-iteration --cfl 50
+if grep -q -F "is no longer finite" "$TMP/stderr"; then ok; else bad "CFL blow-up: $(cat "$TMP/stderr")"; fi
+
+# ---- every colour type and bit depth still works; all-empty slices too ---------------------------------------
+"$LSM" reconstruct good -o ref -q >/dev/null 2>"$TMP/stderr" || bad "reference run: $(cat "$TMP/stderr")"
+ref=$(inside ref/volume.nrrd)
+if [ "$ref" -gt 0 ]; then ok; else bad "reference run has no inside cells"; fi
+for kind in gray16 gray1 graya8 rgb8 rgb16 rgba8 rgba16 palette palette_trns interlaced; do
+  mkdir "k-$kind"
+  for i in 1 2 3; do png "$kind" "k-$kind/$i.png" 32 $((3 + 2 * i)); done
+  "$LSM" reconstruct "k-$kind" -o "out-$kind" -q >/dev/null 2>"$TMP/stderr"
+  rc=$?
+  if [ $rc -eq 0 ]; then
+    n=$(inside "out-$kind/volume.nrrd")
+    if [ "$n" -eq "$ref" ]; then ok; else bad "$kind slices: $n inside cells, 8-bit gray gives $ref"; fi
+  else
+    bad "$kind slices: exit $rc ($(cat "$TMP/stderr"))"
+  fi
+done
+mkdir k-empty
+for i in 1 2 3; do png empty "k-empty/$i.png" 32; done
+"$LSM" reconstruct k-empty -o out-empty -q >/dev/null 2>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && [ "$(inside out-empty/volume.nrrd)" -eq 0 ] &&
+  [ "$(wc -l <out-empty/heights.txt | tr -d ' ')" -eq 3 ]; then
+  ok
+else
+  bad "all-empty slices: exit $rc ($(cat "$TMP/stderr"))"
+fi
+
+# ---- write errors: a file-size limit makes write() fail with EFBIG ----------------------------------------------
+"$PY" "$TESTS/make_stack.py" med 6 128 || bad "make_stack.py med"
+"$LSM" reconstruct med -o prev -q --no-preview >/dev/null 2>"$TMP/stderr" || bad "med run: $(cat "$TMP/stderr")"
+sum=$(fingerprint prev)
+(
+  trap '' XFSZ # without this the kernel's SIGXFSZ would kill lsmorph; ignored, write() fails
+  ulimit -f 40 # 20 or 40 KB: far less than one 128x128 float slice set
+  "$LSM" reconstruct med -o prev -q >"$TMP/stdout" 2>"$TMP/stderr"
+)
+rc=$?
+if [ $rc -eq 1 ]; then ok; else bad "file-size limit: exit $rc, expected 1 ($(cat "$TMP/stderr"))"; fi
+if grep -q "^lsmorph: error: prev/.*File too large" "$TMP/stderr"; then ok; else bad "file-size limit: message $(cat "$TMP/stderr")"; fi
+if [ "$(fingerprint prev)" = "$sum" ]; then ok; else bad "file-size limit: the earlier OUT was changed"; fi
+if leftovers; then bad "file-size limit: a temporary folder was left"; else ok; fi
+(
+  trap '' XFSZ
+  ulimit -f 40
+  "$LSM" reconstruct med -o fresh -q >"$TMP/stdout" 2>"$TMP/stderr"
+)
+rc=$?
+if [ $rc -eq 1 ] && [ ! -e fresh ] && ! leftovers; then ok; else bad "file-size limit, new OUT: exit $rc, fresh exists: $([ -e fresh ] && echo yes)"; fi
+
+# ---- disk full: ENOSPC on a 64 KB tmpfs (only where root may mount one) ------------------------------------
+if [ "$(id -u)" -eq 0 ] && mkdir full && mount -t tmpfs -o size=64k tmpfs full 2>/dev/null; then
+  FULL="$TMP/full"
+  expect "disk full" 1 "full/out/" full/out reconstruct med -o full/out -q
+  if grep -q -F "No space left on device" "$TMP/stderr"; then ok; else bad "disk full: $(cat "$TMP/stderr")"; fi
+  if [ -z "$(ls -A full)" ]; then ok; else bad "disk full: left $(ls -A full)"; fi
+  umount full && FULL=""
+else
+  echo "errors: note: disk-full test skipped (needs root and a tmpfs mount)"
+fi
+
+# ---- interruption: SIGINT / SIGTERM while slices are being written ---------------------------------------------
+# 40 slices of 512x512 at spacing 3 take several seconds; the previous result
+# (a complete run of 6 slices) must survive, and no temporary folder may remain.
+"$PY" "$TESTS/make_stack.py" long 40 512 || bad "make_stack.py long"
+interrupt() { # interrupt SIGNAL EXPECTED_RC
+  rm -rf "$TMP"/long-out.tmp-*
+  # A shell without job control starts background commands with SIGINT
+  # ignored (and lsmorph keeps an ignored SIGINT ignored): restore the default.
+  "$PY" -c 'import os, signal, sys
+signal.signal(signal.SIGINT, signal.SIG_DFL)
+os.execv(sys.argv[1], sys.argv[1:])' "$LSM" reconstruct long -o long-out -q --spacing 3 --no-preview \
+    >/dev/null 2>"$TMP/stderr-$1" &
+  pid=$!
+  i=0
+  started=0
+  while [ $i -lt 1200 ]; do # up to 60 s (sanitizer builds are slow)
+    for f in "$TMP"/long-out.tmp-*/slices/*.png; do
+      [ -e "$f" ] && started=1
+      break
+    done
+    [ $started -eq 1 ] && break
+    kill -0 $pid 2>/dev/null || break
+    sleep 0.05
+    i=$((i + 1))
+  done
+  if [ $started -eq 1 ]; then ok; else bad "$1: the run never started writing slices"; fi
+  kill -s "$1" $pid 2>/dev/null
+  t0=$(date +%s)
+  wait $pid 2>/dev/null
+  rc=$?
+  t1=$(date +%s)
+  if [ $rc -eq "$2" ]; then ok; else bad "$1: exit $rc, expected $2 ($(cat "$TMP/stderr-$1"))"; fi
+  if grep -q -F "lsmorph: error: long-out: interrupted by SIG$1" "$TMP/stderr-$1"; then ok; else bad "$1: message $(cat "$TMP/stderr-$1")"; fi
+  if [ $((t1 - t0)) -le 20 ]; then ok; else bad "$1: took $((t1 - t0)) s to stop"; fi
+  if leftovers; then bad "$1: a temporary folder was left"; else ok; fi
+  if [ "$(fingerprint long-out)" = "$sum_long" ]; then ok; else bad "$1: the earlier result was changed"; fi
+  if [ "$(wc -l <long-out/heights.txt | tr -d ' ')" -eq 6 ]; then ok; else bad "$1: the earlier result is not whole"; fi
+}
+mkdir long-small && cp long/0001.png long/0002.png long-small/
+"$LSM" reconstruct long-small -o long-out -q --spacing 5 --no-preview >/dev/null 2>"$TMP/stderr" ||
+  bad "long-small run: $(cat "$TMP/stderr")"
+sum_long=$(fingerprint long-out)
+interrupt INT 130
+interrupt TERM 143
+
+# ---- a complete run replaces an earlier result as a whole ---------------------------------------------------------------
+"$LSM" reconstruct good -o long-out -q --no-slices >/dev/null 2>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && [ ! -e long-out/slices ] && [ "$(wc -l <long-out/heights.txt | tr -d ' ')" -eq 3 ] &&
+  ! leftovers; then
+  ok
+else
+  bad "replacing an earlier result: exit $rc ($(cat "$TMP/stderr"))"
+fi
+
+finish

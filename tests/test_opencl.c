@@ -1,0 +1,382 @@
+/* The OpenCL backend against the C backend (the reference).
+ *
+ * For each scheme (upwind, roe-fix) and integrator (euler, rk2, rk3), with
+ * and without reinitialisation every 10 steps, a morph state like a real one
+ * (disc SDF -> offset ellipse, 96x80 cells, dx = dy = 1) runs 200 steps on
+ * both backends through the ops table, as lsm_morph drives it:
+ *   max |phi_opencl - phi_c| <= 1e-4 * max(nx, ny) * dx,
+ *   the masks phi <= 0 differ in <= 0.1 % of the cells,
+ *   the CFL dt and the residual agree to 1e-5 relative (every step).
+ * Also: device listing, a missing device index, the kernel cache (a second
+ * open hits it), ghost fill on download, upload, the stage hook refusal.
+ *
+ * The kernel cache goes to a temporary XDG_CACHE_HOME.  When no OpenCL device
+ * can be opened the tests print why and are skipped (the Makefile installs
+ * PoCL, so on CI they run). */
+#include "tests/lsm_test.h"
+
+#include <dirent.h>
+#include <unistd.h>
+
+#include "solver/lsm_backend.h"
+#include "solver/lsm_grid.h"
+#include "solver/lsm_scheme.h"
+#include "solver/lsm_status.h"
+
+typedef struct fixture {
+  lsm_backend *cl;     /* NULL when no device could be opened */
+  lsm_err why;         /* ... and why */
+  char cache[256];     /* temporary XDG_CACHE_HOME */
+  int first_hit;       /* kernel_cache_hit of the first open (empty cache) */
+} fixture;
+
+static fixture fx; /* the group's state: set up once, read by the tests */
+
+/* ------------------------------------------------------------------------ */
+/* helpers                                                                   */
+
+static lsm_grid *new_grid(int nx, int ny, float dx, float dy) {
+  lsm_grid *g = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_grid_create(nx, ny, dx, dy, &g, &err), LSM_OK);
+  return g;
+}
+
+/* Source: SDF of a disc; target: an offset, squashed disc (an ellipse-like
+ * field, not exactly a distance), so F changes sign and every Roe-Fix branch
+ * is taken. */
+static void fill_pair(lsm_grid *src, lsm_grid *dst) {
+  const int nx = src->nx, ny = src->ny;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      double x = (i + 0.5) * src->dx, y = (j + 0.5) * src->dy;
+      double ex = 0.42 * nx * src->dx, ey = 0.5 * ny * src->dy, r = 0.3 * ny * src->dy;
+      LSM_AT(src, i, j) = (float)(hypot(x - ex, y - ey) - r);
+      LSM_AT(dst, i, j) = (float)(hypot(x - 0.58 * nx * src->dx, 1.4 * (y - 0.55 * ny * src->dy)) -
+                                  0.26 * ny * src->dy);
+    }
+  lsm_grid_fill_ghosts(src);
+  lsm_grid_fill_ghosts(dst);
+}
+
+/* Files in a folder: how many end in suffix, how many do not; removes them all
+ * when remove_all. */
+static void scan_dir(const char *dir, const char *suffix, int *with, int *without, int remove_all) {
+  *with = *without = 0;
+  DIR *d = opendir(dir);
+  if (!d) return;
+  struct dirent *e;
+  while ((e = readdir(d)) != NULL) {
+    if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+    size_t n = strlen(e->d_name), m = strlen(suffix);
+    if (n >= m && strcmp(e->d_name + n - m, suffix) == 0)
+      (*with)++;
+    else
+      (*without)++;
+    if (remove_all) {
+      char path[768];
+      snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+      remove(path);
+    }
+  }
+  closedir(d);
+}
+
+static int need_device(void) {
+  if (fx.cl) return 1;
+  print_message("opencl: skipped: %s\n", fx.why.msg[0] ? fx.why.msg : "no OpenCL device");
+  return 0;
+}
+
+#define NEED_DEVICE() \
+  do {                \
+    if (!need_device()) skip(); \
+  } while (0)
+
+/* ------------------------------------------------------------------------ */
+/* setup                                                                     */
+
+static int group_setup(void **state) {
+  (void)state;
+  memset(&fx, 0, sizeof fx);
+  snprintf(fx.cache, sizeof fx.cache, "%s/lsm-opencl-test.XXXXXX",
+           getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+  if (!mkdtemp(fx.cache)) return -1;
+  if (setenv("XDG_CACHE_HOME", fx.cache, 1) != 0) return -1;
+  lsm_err_clear(&fx.why);
+  /* First open: builds from source (empty cache) and stores the binary. */
+  lsm_backend *b = NULL;
+  if (lsm_backend_open(LSM_BACKEND_OPENCL, -1, 1, &b, &fx.why) != LSM_OK) return 0;
+  fx.first_hit = b->kernel_cache_hit;
+  lsm_backend_close(&b);
+  /* Second open: from the cache. */
+  lsm_err_clear(&fx.why);
+  if (lsm_backend_open(LSM_BACKEND_OPENCL, -1, 1, &fx.cl, &fx.why) != LSM_OK) fx.cl = NULL;
+  return 0;
+}
+
+static int group_teardown(void **state) {
+  (void)state;
+  lsm_backend_close(&fx.cl);
+  if (fx.cache[0]) {
+    char dir[512];
+    int a, b;
+    snprintf(dir, sizeof dir, "%s/lsmorph", fx.cache);
+    scan_dir(dir, ".clbin", &a, &b, 1);
+    remove(dir);
+    remove(fx.cache);
+  }
+  return 0;
+}
+
+/* ------------------------------------------------------------------------ */
+/* backend plumbing                                                          */
+
+static void test_list_devices(void **state) {
+  (void)state;
+  NEED_DEVICE();
+  char *buf = NULL;
+  size_t size = 0;
+  FILE *f = open_memstream(&buf, &size);
+  assert_non_null(f);
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_backend_cl_list(f, &err), LSM_OK);
+  fclose(f);
+  assert_non_null(strstr(buf, "  0: "));
+  assert_non_null(strstr(buf, "compute unit"));
+  assert_non_null(strstr(buf, "global memory"));
+  free(buf);
+}
+
+static void test_missing_device(void **state) {
+  (void)state;
+  NEED_DEVICE();
+  lsm_backend *b = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_backend_open(LSM_BACKEND_OPENCL, 99, 1, &b, &err), LSM_ERR_INPUT);
+  assert_null(b);
+  assert_non_null(strstr(err.msg, "device 99 does not exist"));
+  /* auto falls back to C */
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_backend_open(LSM_BACKEND_AUTO, 99, 1, &b, &err), LSM_OK);
+  assert_ptr_equal(b->ops, lsm_backend_c_ops());
+  lsm_backend_close(&b);
+}
+
+static void test_kernel_cache(void **state) {
+  (void)state;
+  NEED_DEVICE();
+  assert_int_equal(fx.first_hit, 0);
+  assert_int_equal(fx.cl->kernel_cache_hit, 1);
+  assert_true(fx.cl->build_seconds >= 0.0);
+  assert_string_equal(fx.cl->ops->name, "opencl");
+  assert_non_null(strchr(fx.cl->device, '('));
+  /* One binary in the cache folder, no temporary file left behind. */
+  char dir[512];
+  int bins = 0, others = 0;
+  snprintf(dir, sizeof dir, "%s/lsmorph", fx.cache);
+  scan_dir(dir, ".clbin", &bins, &others, 0);
+  assert_int_equal(bins, 1);
+  assert_int_equal(others, 0);
+}
+
+/* A damaged cache file is not handed to the driver: the program is built from
+ * source again (and the file rewritten), then the cache hits again. */
+static void test_kernel_cache_damaged(void **state) {
+  (void)state;
+  NEED_DEVICE();
+  char dir[512], path[1024];
+  snprintf(dir, sizeof dir, "%s/lsmorph", fx.cache);
+  DIR *d = opendir(dir);
+  assert_non_null(d);
+  struct dirent *e;
+  path[0] = '\0';
+  while ((e = readdir(d)) != NULL)
+    if (strstr(e->d_name, ".clbin")) snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+  closedir(d);
+  assert_true(path[0] != '\0');
+  FILE *f = fopen(path, "r+b");
+  assert_non_null(f);
+  assert_int_equal(fseek(f, 200, SEEK_SET), 0);
+  for (int k = 0; k < 64; ++k) fputc(0x5a ^ k, f);
+  fclose(f);
+  lsm_backend *b = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_backend_open(LSM_BACKEND_OPENCL, -1, 1, &b, &err), LSM_OK);
+  assert_int_equal(b->kernel_cache_hit, 0);
+  lsm_backend_close(&b);
+  assert_int_equal(lsm_backend_open(LSM_BACKEND_OPENCL, -1, 1, &b, &err), LSM_OK);
+  assert_int_equal(b->kernel_cache_hit, 1);
+  lsm_backend_close(&b);
+}
+
+/* upload / download round trip, ghosts filled on download, hook refusal,
+ * residual of phi == target is 0. */
+static void test_plumbing(void **state) {
+  (void)state;
+  NEED_DEVICE();
+  const int nx = 37, ny = 23;
+  lsm_grid *a = new_grid(nx, ny, 1.0f, 1.0f), *t = new_grid(nx, ny, 1.0f, 1.0f);
+  lsm_grid *back = new_grid(nx, ny, 1.0f, 1.0f);
+  fill_pair(a, t);
+  const lsm_backend_ops *ops = fx.cl->ops;
+  void *st = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(ops->create(fx.cl->ctx, a, t, 1, &st, &err), LSM_OK);
+  assert_null(ops->host_phi(st));
+  /* Garbage in the ghosts of the upload: download must return them filled. */
+  for (int j = 0; j < ny; ++j) LSM_AT(a, -2, j) = 1e6f;
+  assert_int_equal(ops->upload(st, a, &err), LSM_OK);
+  assert_int_equal(ops->download(st, back, &err), LSM_OK);
+  lsm_grid_fill_ghosts(a);
+  assert_memory_equal(a->base, back->base,
+                      (size_t)(ny + 2 * LSM_GHOST) * (size_t)a->stride * sizeof(float));
+  /* Residual: phi = target gives 0. */
+  assert_int_equal(ops->upload(st, t, &err), LSM_OK);
+  double norm = -1.0, dt = 0.0;
+  assert_int_equal(ops->residual(st, &norm, &err), LSM_OK);
+  assert_true(norm == 0.0);
+  assert_int_equal(ops->cfl_dt(st, 0.75, &dt, &err), LSM_OK);
+  assert_true(isinf(dt));
+  /* Stage hooks (particles) are refused. */
+  lsm_stage_hook hook = {NULL, NULL};
+  assert_int_equal(ops->step(st, LSM_SCHEME_UPWIND, LSM_TIME_EULER, 0.1f, &hook, &err),
+                   LSM_ERR_UNSUPPORTED);
+  assert_non_null(strstr(err.msg, "particles run on the C backend only"));
+  /* Reinit with 0 iterations is a no-op. */
+  lsm_err_clear(&err);
+  assert_int_equal(ops->reinit(st, 0, &err), LSM_OK);
+  ops->destroy(&st);
+  assert_null(st);
+  lsm_grid_destroy(&a);
+  lsm_grid_destroy(&t);
+  lsm_grid_destroy(&back);
+}
+
+/* ------------------------------------------------------------------------ */
+/* the morph on both backends                                                */
+
+typedef struct morph_case {
+  lsm_scheme scheme;
+  lsm_time time;
+  int reinit_every;
+  int nx, ny;
+  float dx, dy;
+} morph_case;
+
+static double rel_diff(double a, double b) {
+  double m = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
+  return m > 0.0 ? fabs(a - b) / m : 0.0;
+}
+
+static void test_morph_matches_c(void **state) {
+  const morph_case *mc = *state;
+  NEED_DEVICE();
+  const int nx = mc->nx, ny = mc->ny, steps = 200;
+  lsm_grid *src = new_grid(nx, ny, mc->dx, mc->dy), *dst = new_grid(nx, ny, mc->dx, mc->dy);
+  lsm_grid *got = new_grid(nx, ny, mc->dx, mc->dy), *ref = new_grid(nx, ny, mc->dx, mc->dy);
+  fill_pair(src, dst);
+  const lsm_backend_ops *c_ops = lsm_backend_c_ops(), *cl_ops = fx.cl->ops;
+  void *cs = NULL, *gs = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(c_ops->create(NULL, src, dst, 1, &cs, &err), LSM_OK);
+  assert_int_equal(cl_ops->create(fx.cl->ctx, src, dst, 1, &gs, &err), LSM_OK);
+
+  double dt_c = 0.0, dt_g = 0.0, res_c = 0.0, res_g = 0.0;
+  double worst_dt = 0.0, worst_res = 0.0, res0 = 0.0;
+  assert_int_equal(c_ops->cfl_dt(cs, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(cl_ops->cfl_dt(gs, 0.75, &dt_g, &err), LSM_OK);
+  worst_dt = rel_diff(dt_c, dt_g);
+  assert_int_equal(c_ops->residual(cs, &res0, &err), LSM_OK);
+  assert_true(dt_c > 0.0 && isfinite(dt_c));
+  for (int n = 1; n <= steps; ++n) {
+    assert_int_equal(c_ops->step(cs, mc->scheme, mc->time, (float)dt_c, NULL, &err), LSM_OK);
+    assert_int_equal(cl_ops->step(gs, mc->scheme, mc->time, (float)dt_c, NULL, &err), LSM_OK);
+    if (mc->reinit_every > 0 && n % mc->reinit_every == 0) {
+      assert_int_equal(c_ops->reinit(cs, 10, &err), LSM_OK);
+      assert_int_equal(cl_ops->reinit(gs, 10, &err), LSM_OK);
+    }
+    assert_int_equal(c_ops->residual(cs, &res_c, &err), LSM_OK);
+    assert_int_equal(cl_ops->residual(gs, &res_g, &err), LSM_OK);
+    double r = rel_diff(res_c, res_g);
+    if (r > worst_res) worst_res = r;
+  }
+  /* The CFL reduction on the evolved state as well. */
+  assert_int_equal(c_ops->cfl_dt(cs, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(cl_ops->cfl_dt(gs, 0.75, &dt_g, &err), LSM_OK);
+  if (rel_diff(dt_c, dt_g) > worst_dt) worst_dt = rel_diff(dt_c, dt_g);
+
+  assert_int_equal(c_ops->download(cs, ref, &err), LSM_OK);
+  assert_int_equal(cl_ops->download(gs, got, &err), LSM_OK);
+  double max_diff = 0.0;
+  long mask_diff = 0;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      float a = LSM_AT(ref, i, j), b = LSM_AT(got, i, j);
+      assert_true(isfinite(b));
+      double d = fabs((double)a - (double)b);
+      if (d > max_diff) max_diff = d;
+      mask_diff += (a <= 0.0f) != (b <= 0.0f);
+    }
+  const double extent = (nx > ny ? nx : ny) * (double)mc->dx;
+  print_message("opencl: %-7s %-5s reinit %-2d %dx%d: max|phi_cl - phi_c| = %.3g (limit %.3g), "
+                "masks differ in %ld cells, dt rel %.2g, residual rel %.2g (final %.6g)\n",
+                lsm_scheme_name(mc->scheme), lsm_time_name(mc->time), mc->reinit_every, nx, ny,
+                max_diff, 1e-4 * extent, mask_diff, worst_dt, worst_res, res_c);
+  assert_true(max_diff <= 1e-4 * extent);
+  assert_true((double)mask_diff <= 0.001 * nx * ny);
+  assert_true(worst_dt <= 1e-5);
+  assert_true(worst_res <= 1e-5);
+  /* The morph moved: the residual fell. */
+  assert_true(res_c < 0.5 * res0);
+  c_ops->destroy(&cs);
+  cl_ops->destroy(&gs);
+  lsm_grid_destroy(&src);
+  lsm_grid_destroy(&dst);
+  lsm_grid_destroy(&got);
+  lsm_grid_destroy(&ref);
+}
+
+#define CASE(s, t, r) {s, t, r, 96, 80, 1.0f, 1.0f}
+static const morph_case cases[] = {
+    CASE(LSM_SCHEME_UPWIND, LSM_TIME_EULER, 0), CASE(LSM_SCHEME_UPWIND, LSM_TIME_RK2, 0),
+    CASE(LSM_SCHEME_UPWIND, LSM_TIME_RK3, 0),   CASE(LSM_SCHEME_ROEFIX, LSM_TIME_EULER, 0),
+    CASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK2, 0),   CASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK3, 0),
+    CASE(LSM_SCHEME_UPWIND, LSM_TIME_EULER, 10), CASE(LSM_SCHEME_UPWIND, LSM_TIME_RK2, 10),
+    CASE(LSM_SCHEME_UPWIND, LSM_TIME_RK3, 10),   CASE(LSM_SCHEME_ROEFIX, LSM_TIME_EULER, 10),
+    CASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK2, 10),   CASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK3, 10),
+    /* Unequal spacing and a size that is no multiple of any work-group. */
+    {LSM_SCHEME_ROEFIX, LSM_TIME_RK2, 10, 53, 131, 0.5f, 0.75f},
+};
+
+#define MORPH(k, name) {name, test_morph_matches_c, NULL, NULL, (void *)&cases[k]}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_list_devices),
+      cmocka_unit_test(test_missing_device),
+      cmocka_unit_test(test_kernel_cache),
+      cmocka_unit_test(test_kernel_cache_damaged),
+      cmocka_unit_test(test_plumbing),
+      MORPH(0, "morph upwind euler"),
+      MORPH(1, "morph upwind rk2"),
+      MORPH(2, "morph upwind rk3"),
+      MORPH(3, "morph roe-fix euler"),
+      MORPH(4, "morph roe-fix rk2"),
+      MORPH(5, "morph roe-fix rk3"),
+      MORPH(6, "morph upwind euler reinit"),
+      MORPH(7, "morph upwind rk2 reinit"),
+      MORPH(8, "morph upwind rk3 reinit"),
+      MORPH(9, "morph roe-fix euler reinit"),
+      MORPH(10, "morph roe-fix rk2 reinit"),
+      MORPH(11, "morph roe-fix rk3 reinit"),
+      MORPH(12, "morph roe-fix rk2 reinit 53x131 dx 0.5 dy 0.75"),
+  };
+  return cmocka_run_group_tests_name("test_opencl", tests, group_setup, group_teardown);
+}

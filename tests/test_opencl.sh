@@ -1,0 +1,165 @@
+#!/bin/sh
+# End-to-end tests of the OpenCL backend.
+#   sh tests/test_opencl.sh BUILD_DIR
+# Whole `lsmorph reconstruct` runs with --backend c and --backend opencl on
+# generated stacks (the candlestick set, masks) and on every 8th slice of the
+# bunny (../shared/data/bunny, when present) must agree within 1e-3 in every
+# voxel of volume.nrrd; `lsmorph devices` lists a device; a missing device
+# index and --method pls on OpenCL fail with exit 1 and a message; the second
+# run hits the kernel cache.  Prints one line per failed check and
+# "opencl: N passed, N failed".  Without any OpenCL platform or device the
+# checks are skipped (the Makefile installs PoCL, so on CI they run).
+set -u
+BUILD=${1:-build}
+LSM="$BUILD/lsmorph"
+GEN="$BUILD/examples/gen_synthetic"
+PY=/usr/bin/python3
+BUNNY=../shared/data/bunny
+TOL=1e-3
+pass=0
+fail=0
+
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "opencl: FAIL: $*"; }
+check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
+  desc=$1
+  shift
+  if "$@"; then ok; else bad "$desc"; fi
+}
+finish() {
+  echo "opencl: $pass passed, $fail failed"
+  [ "$fail" -eq 0 ]
+  exit
+}
+
+for f in "$LSM" "$GEN"; do
+  [ -x "$f" ] || { bad "$f is missing (run make first)"; finish; }
+done
+
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-opencl.XXXXXX") || exit 1
+trap 'rm -rf "$TMP"' EXIT
+trap 'exit 1' INT TERM
+# The kernel cache of these runs lives and dies with the temporary folder.
+XDG_CACHE_HOME="$TMP/cache"
+export XDG_CACHE_HOME
+
+# ---- devices -------------------------------------------------------------------------------
+"$LSM" devices >"$TMP/dev" 2>"$TMP/e"
+rc=$?
+if [ $rc -ne 0 ]; then
+  case $(cat "$TMP/e") in
+  *"no platform"* | *"no device"*)
+    echo "opencl: skipped: $(cat "$TMP/e")"
+    finish
+    ;;
+  esac
+fi
+check "lsmorph devices exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "lsmorph devices lists device 0" grep -q '^  0: ' "$TMP/dev"
+check "lsmorph devices gives type, compute units and memory" \
+  grep -q 'type .*compute unit.*global memory' "$TMP/dev"
+
+# The slice folder is read before the device is opened: use a real one.
+"$GEN" candlestick "$TMP/syn" --mask >"$TMP/o" 2>"$TMP/e" || {
+  bad "gen_synthetic candlestick failed: $(cat "$TMP/e")"
+  finish
+}
+SET="$TMP/syn/candlestick"
+"$LSM" reconstruct "$SET" -o "$TMP/d99" --backend opencl --device 99 -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--device 99 exits 1 (got $rc)" [ $rc -eq 1 ]
+check "--device 99 says the device does not exist (got: $(cat "$TMP/e"))" \
+  grep -q 'device 99 does not exist' "$TMP/e"
+check "--device 99 writes nothing" [ ! -e "$TMP/d99/volume.nrrd" ]
+
+# No OpenCL platform (an empty ICD vendor folder): a clear error, and auto falls back to C.
+mkdir -p "$TMP/no-icd"
+OCL_ICD_VENDORS="$TMP/no-icd" "$LSM" reconstruct "$SET" -o "$TMP/noplat" --backend opencl -q \
+  --heights "$SET/heights.txt" --dz 10 >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "no platform: --backend opencl exits 1 (got $rc)" [ $rc -eq 1 ]
+check "no platform: the message says so (got: $(cat "$TMP/e"))" grep -q 'OpenCL: no platform found' "$TMP/e"
+OCL_ICD_VENDORS="$TMP/no-icd" "$LSM" reconstruct "$SET" -o "$TMP/noplat-auto" --backend auto -q \
+  --heights "$SET/heights.txt" --dz 10 --no-preview >"$TMP/o" 2>"$TMP/e"
+check "no platform: --backend auto exits 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+check "no platform: --backend auto ran on C" grep -q '"backend": {"name": "c"' "$TMP/noplat-auto/run.json"
+
+# ---- C against OpenCL, voxel by voxel ------------------------------------------------------
+# max_diff A B: the largest |a - b| over the float32 voxels after the 512-byte
+# headers, or "size" when the volumes differ in size.
+max_diff() {
+  "$PY" - "$1" "$2" <<'EOF'
+import sys
+import numpy as np
+a = np.fromfile(sys.argv[1], dtype="<f4", offset=512)
+b = np.fromfile(sys.argv[2], dtype="<f4", offset=512)
+if a.size != b.size or a.size == 0 or open(sys.argv[1], "rb").read(512) != open(sys.argv[2], "rb").read(512):
+    print("size")
+elif not (np.isfinite(a).all() and np.isfinite(b).all()):
+    print("nan")
+else:
+    print("%.6g" % float(np.abs(a.astype(np.float64) - b).max()))
+EOF
+}
+
+# compare NAME SLICE_DIR ARGS...: reconstructs with both backends and checks the volumes.
+compare() {
+  name=$1
+  dir=$2
+  shift 2
+  for b in c opencl; do
+    "$LSM" reconstruct "$dir" -o "$TMP/$name-$b" --backend "$b" -q --no-preview --no-slices "$@" \
+      >"$TMP/o" 2>"$TMP/e"
+    rc=$?
+    check "$name: --backend $b exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+  done
+  [ -f "$TMP/$name-c/volume.nrrd" ] && [ -f "$TMP/$name-opencl/volume.nrrd" ] || {
+    bad "$name: a volume is missing"
+    return
+  }
+  d=$(max_diff "$TMP/$name-c/volume.nrrd" "$TMP/$name-opencl/volume.nrrd")
+  echo "opencl: $name: max |volume_opencl - volume_c| = $d"
+  check "$name: volumes agree within $TOL (max diff $d)" \
+    awk -v d="$d" -v t="$TOL" 'BEGIN { exit !(d != "size" && d != "nan" && d + 0 <= t + 0) }'
+  check "$name: run.json names the opencl backend" \
+    grep -q '"backend": {"name": "opencl"' "$TMP/$name-opencl/run.json"
+}
+
+compare candlestick "$SET" --heights "$SET/heights.txt" --dz 10
+check "the first OpenCL run missed the kernel cache" \
+  grep -q '"kernel_cache_hit": false' "$TMP/candlestick-opencl/run.json"
+compare candlestick-roefix-rk3 "$SET" --heights "$SET/heights.txt" --dz 10 \
+  --scheme roe-fix --time rk3 --reinit-every 10
+check "the second OpenCL run hit the kernel cache" \
+  grep -q '"kernel_cache_hit": true' "$TMP/candlestick-roefix-rk3-opencl/run.json"
+check "one kernel binary in the cache" [ "$(ls "$XDG_CACHE_HOME/lsmorph" | grep -c '\.clbin$')" -eq 1 ]
+"$LSM" reconstruct "$SET" -o "$TMP/pls" --backend opencl --method pls \
+  --heights "$SET/heights.txt" --dz 10 -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--method pls --backend opencl exits 1 (got $rc)" [ $rc -eq 1 ]
+check "--method pls --backend opencl names the C backend (got: $(cat "$TMP/e"))" \
+  grep -q 'C backend only' "$TMP/e"
+"$LSM" reconstruct "$SET" -o "$TMP/blend" --backend opencl --method blend \
+  --heights "$SET/heights.txt" --dz 10 -q >"$TMP/o" 2>"$TMP/e"
+check "--method blend --backend opencl (host path) exits 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+
+compare candlestick-rk2-track "$SET" --scheme upwind --time rk2 --per-iteration --tol 2
+
+if [ -d "$BUNNY" ]; then
+  mkdir -p "$TMP/bunny"
+  k=0
+  for f in $(ls "$BUNNY" | grep '\.png$'); do
+    [ $((k % 8)) -eq 0 ] && cp "$BUNNY/$f" "$TMP/bunny/"
+    k=$((k + 1))
+  done
+  compare bunny "$TMP/bunny" --spacing 8 --dz 2
+else
+  echo "opencl: note: $BUNNY not found, bunny comparison not run"
+fi
+
+# auto picks OpenCL when a device is present.
+"$LSM" reconstruct "$SET" -o "$TMP/auto" --backend auto -q --no-preview >"$TMP/o" 2>"$TMP/e"
+check "--backend auto exits 0" [ $? -eq 0 ]
+check "--backend auto ran on OpenCL" grep -q '"backend": {"name": "opencl"' "$TMP/auto/run.json"
+
+finish
