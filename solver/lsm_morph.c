@@ -85,6 +85,12 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
 lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
   double dt = m->dt < max_dt ? m->dt : max_dt;
   if (!(dt > 0.0)) return LSM_OK;
+  if (!isfinite(dt)) {
+    /* Nothing can move (phi == phi_target, or phi has no gradient anywhere):
+     * the morph is at rest. */
+    m->cp = 0.0;
+    return LSM_OK;
+  }
   lsm_stage_hook hook = {m->pls, lsm_pls_stage_hook};
   if (m->pls) lsm_pls_begin_step(m->pls);
   LSM_TRY(m->ops->step(m->state, m->opts.scheme, m->opts.time, (float)dt, m->pls ? &hook : NULL,

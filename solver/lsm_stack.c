@@ -661,30 +661,50 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
   gap g;
   LSM_TRY(gap_setup(r, w, &g, err));
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
+  /* An empty source has no front to move: morph the target into the empty
+   * slice instead (it shrinks to nothing) and emit its iterates in reverse.
+   * With one empty side the object ends halfway (as in default mode): the
+   * morph stops when the shape has vanished, and its iterates fill the half
+   * of the gap next to the non-empty slice. */
+  const int reverse = w->s[1]->empty && !w->s[2]->empty;
+  const int cap = w->s[1]->empty != w->s[2]->empty;
+  const lsm_grid *from = reverse ? g.phi_b : g.phi_a, *to = reverse ? g.phi_a : g.phi_b;
   lsm_morph *m = NULL;
   const double t0 = now_seconds();
-  lsm_status st = lsm_morph_create(g.phi_a, g.phi_b, &r->morph, &m, err);
+  lsm_status st = lsm_morph_create(from, to, &r->morph, &m, err);
   int k = 0;
-  while (st == LSM_OK && k < r->opts->max_iter) {
+  const int still = st == LSM_OK && !isfinite(lsm_morph_dt(m)); /* nothing can move */
+  while (st == LSM_OK && !still && k < r->opts->max_iter) {
     st = lsm_morph_step(m, INFINITY, err);
     ++k;
     if (st == LSM_OK && lsm_morph_cp(m) <= r->opts->tol) break;
+    if (st == LSM_OK && cap) {
+      const lsm_grid *pm = lsm_morph_phi(m);
+      if (!pm) st = lsm_fail(err, lsm_morph_error(m)->status, NULL, "%s", lsm_morph_error(m)->msg);
+      else if (lsm_grid_min(pm) > 0.0f) break; /* vanished */
+    }
   }
   if (st == LSM_OK) {
     ps->iterations = k;
-    ps->dt = lsm_morph_dt(m);
-    ps->cp = lsm_morph_cp(m);
+    ps->dt = isfinite(lsm_morph_dt(m)) ? lsm_morph_dt(m) : 0.0;
+    ps->cp = still ? 0.0 : lsm_morph_cp(m);
     ps->t_final = lsm_morph_time(m);
     ps->hit_max_iter = k >= r->opts->max_iter && lsm_morph_cp(m) > r->opts->tol;
   }
   lsm_morph_destroy(&m);
   double solver = now_seconds() - t0;
-  if (st == LSM_OK) st = lsm_morph_create(g.phi_a, g.phi_b, &r->morph, &m, err);
+  const size_t cells = (size_t)r->width * (size_t)r->height;
+  FILE *park = NULL;
+  if (st == LSM_OK && reverse && k > 0 && !(park = tmpfile()))
+    st = lsm_fail(err, LSM_ERR_IO, NULL, "cannot create a temporary file: %s", strerror(errno));
+  if (st == LSM_OK && k > 0) st = lsm_morph_create(from, to, &r->morph, &m, err);
   for (int n = 1; st == LSM_OK && n <= k; ++n) {
     double t1 = now_seconds();
     st = lsm_morph_step(m, INFINITY, err);
     if (st != LSM_OK) break;
-    const double s = (double)n / (double)(k + 1);
+    const double span = cap ? 0.5 * (double)(k + 1) / (double)k : 1.0; /* last iterate at 1/2 */
+    const double s = reverse ? 1.0 - span * (double)n / (double)(k + 1)
+                             : span * (double)n / (double)(k + 1);
     const lsm_grid *pm = lsm_morph_phi(m);
     if (!pm) {
       st = lsm_fail(err, lsm_morph_error(m)->status, NULL, "%s", lsm_morph_error(m)->msg);
@@ -692,9 +712,29 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
     }
     frame_extract(&g.f, pm, s, r->out);
     solver += now_seconds() - t1;
+    if (reverse) {
+      /* iterate n is output k - n: park it in slot k - n */
+      if (fseeko(park, (off_t)((size_t)(k - n) * cells * sizeof(float)), SEEK_SET) != 0 ||
+          fwrite(r->out, sizeof(float), cells, park) != cells)
+        st = lsm_fail(err, LSM_ERR_IO, NULL, "cannot write a temporary file: %s", strerror(errno));
+    } else {
+      st = emit(r, za + s * (zb - za), -1, err);
+      ps->slices++;
+    }
+  }
+  for (int q = 0; st == LSM_OK && reverse && q < k; ++q) {
+    /* slot q holds iterate k - q, at s = 1 - span (k - q) / (k + 1) */
+    const double span = 0.5 * (double)(k + 1) / (double)k;
+    const double s = 1.0 - span * (double)(k - q) / (double)(k + 1);
+    if (fseeko(park, (off_t)((size_t)q * cells * sizeof(float)), SEEK_SET) != 0 ||
+        fread(r->out, sizeof(float), cells, park) != cells) {
+      st = lsm_fail(err, LSM_ERR_IO, NULL, "cannot read a temporary file");
+      break;
+    }
     st = emit(r, za + s * (zb - za), -1, err);
     ps->slices++;
   }
+  if (park) fclose(park);
   ps->seconds = solver;
   add_pls_stats(ps, m);
   lsm_morph_destroy(&m);
