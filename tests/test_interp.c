@@ -263,12 +263,45 @@ static void test_stride_one(void **state) {
   record_free(&rec);
 }
 
+/* Per-iteration mode with an empty slice and two identical slices: no
+ * numerical failure, the object ends halfway next to the empty slice, and the
+ * identical pair takes no iterations. */
+static void test_per_iteration_empty_identical(void **state) {
+  (void)state;
+  const double radius[4] = {0.0, 20.0, 20.0, 10.0}, z[4] = {0.0, 8.0, 16.0, 24.0};
+  disc_source src = {64, radius, NULL};
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  o.per_iteration = 1;
+  record rec = {0};
+  run_stack(&src, z, 4, &o, &rec);
+  const size_t cells = (size_t)rec.w * rec.h;
+  int inputs = 0;
+  double last_empty = -1.0, first_full = 1e9;
+  for (size_t q = 0; q < rec.count; ++q) {
+    if (rec.input[q] >= 0) inputs++;
+    if (q > 0) assert_true(rec.z[q] > rec.z[q - 1]);
+    size_t inside = 0;
+    for (size_t c = 0; c < cells; ++c) inside += rec.phi[q * cells + c] <= 0.0f;
+    if (rec.z[q] < 8.0 && inside == 0) last_empty = fmax(last_empty, rec.z[q]);
+    if (rec.z[q] < 8.0 && inside > 0) first_full = fmin(first_full, rec.z[q]);
+  }
+  assert_int_equal(inputs, 4);
+  /* the object is absent up to mid-gap (z = 4) and present after it */
+  assert_close(last_empty, 4.0, 1e-9);
+  assert_true(first_full > 4.0);
+  /* the identical pair (z 8 -> 16) adds no slice between its inputs */
+  for (size_t q = 0; q < rec.count; ++q) assert_false(rec.z[q] > 8.0 && rec.z[q] < 16.0);
+  record_free(&rec);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cubic_monotone),
       cmocka_unit_test(test_inputs_exact),
       cmocka_unit_test(test_c1_ball),
       cmocka_unit_test(test_stride_one),
+      cmocka_unit_test(test_per_iteration_empty_identical),
   };
   return cmocka_run_group_tests_name("interp", tests, NULL, NULL);
 }
