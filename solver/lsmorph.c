@@ -351,6 +351,12 @@ static lsm_status make_temp_dir(const char *out_dir, char *tmp, size_t size, lsm
   if (!mkdtemp(tmp))
     return lsm_fail(err, LSM_ERR_IO, out_dir, "cannot create a folder next to it: %s",
                     strerror(errno));
+  /* mkdtemp makes it private (0700); the published result gets the usual
+   * permissions of a new folder (0777 less the umask). */
+  const mode_t mask = umask(0);
+  umask(mask);
+  if (chmod(tmp, 0777 & ~mask) != 0)
+    return lsm_fail(err, LSM_ERR_IO, tmp, "cannot set permissions: %s", strerror(errno));
   return LSM_OK;
 }
 
