@@ -857,10 +857,12 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
 
 /* How many gaps to run at once: all cores on separate gaps when one gap's
  * grid is too small to keep them busy (up to 1024^2 pixels), else one gap at
- * a time with the threads inside it. */
+ * a time with the threads inside it (and always one at a time on a device). */
 static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps) {
   const int threads = o->morph.threads < 1 ? 1 : o->morph.threads;
   if (threads == 1 || gaps < 2 || (long long)width * height > 1024LL * 1024LL) return 1;
+  /* A device backend shares one context and queue: one gap at a time. */
+  if (o->morph.backend && o->morph.backend->ops != lsm_backend_c_ops()) return 1;
   return (size_t)threads < gaps ? threads : (int)gaps;
 }
 
