@@ -249,12 +249,24 @@ lsm_status lsm_backend_cl_list(FILE *f, lsm_err *err) {
     device_str(refs[k].device, CL_DEVICE_VERSION, version, sizeof version);
     device_str(refs[k].device, CL_DRIVER_VERSION, driver, sizeof driver);
     platform_str(refs[k].platform, CL_PLATFORM_NAME, plat, sizeof plat);
-    clGetDeviceInfo(refs[k].device, CL_DEVICE_TYPE, sizeof type, &type, NULL);
-    clGetDeviceInfo(refs[k].device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL);
-    clGetDeviceInfo(refs[k].device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
-    fprintf(f, "  %u: %s (%s)\n     type %s, %u compute unit%s, %.0f MiB global memory, %s, driver %s\n",
-            k, name, plat, device_type_name(type), units, units == 1 ? "" : "s",
-            (double)mem / (1024.0 * 1024.0), version, driver);
+    /* A failed query prints as unknown rather than failing the list. */
+    const int has_type =
+        clGetDeviceInfo(refs[k].device, CL_DEVICE_TYPE, sizeof type, &type, NULL) == CL_SUCCESS;
+    const int has_units = clGetDeviceInfo(refs[k].device, CL_DEVICE_MAX_COMPUTE_UNITS,
+                                          sizeof units, &units, NULL) == CL_SUCCESS;
+    const int has_mem = clGetDeviceInfo(refs[k].device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem,
+                                        &mem, NULL) == CL_SUCCESS;
+    fprintf(f, "  %u: %s (%s)\n     type %s, ", k, name, plat,
+            has_type ? device_type_name(type) : "unknown");
+    if (has_units)
+      fprintf(f, "%u compute unit%s, ", units, units == 1 ? "" : "s");
+    else
+      fprintf(f, "? compute units, ");
+    if (has_mem)
+      fprintf(f, "%.0f MiB global memory, ", (double)mem / (1024.0 * 1024.0));
+    else
+      fprintf(f, "? MiB global memory, ");
+    fprintf(f, "%s, driver %s\n", version, driver);
   }
   free(refs);
   return LSM_OK;
@@ -273,7 +285,7 @@ typedef struct cl_ctx {
   size_t red_local[2];      /* reductions' work-group, a power of two in all */
   int red_run;              /* cells per work-item and row in the reductions */
   size_t max_group;         /* CL_DEVICE_MAX_WORK_GROUP_SIZE */
-  size_t max_items[3];      /* CL_DEVICE_MAX_WORK_ITEM_SIZES */
+  size_t max_items[3];      /* CL_DEVICE_MAX_WORK_ITEM_SIZES, first three dimensions */
   cl_ulong max_alloc, global_mem;
 } cl_ctx;
 
@@ -560,16 +572,18 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
   cl_int e = CL_SUCCESS;
   cl_device_fp_config fp = 0;
   cl_device_type type = 0;
+  size_t items[64] = {0}; /* CL_DEVICE_MAX_WORK_ITEM_SIZES: one per dimension (>= 3) */
   cl_bool available = CL_FALSE, compiler = CL_FALSE;
   if ((e = clGetDeviceInfo(c->device, CL_DEVICE_AVAILABLE, sizeof available, &available, NULL)) ||
       (e = clGetDeviceInfo(c->device, CL_DEVICE_COMPILER_AVAILABLE, sizeof compiler, &compiler, NULL)) ||
       (e = clGetDeviceInfo(c->device, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, NULL)) ||
       (e = clGetDeviceInfo(c->device, CL_DEVICE_TYPE, sizeof type, &type, NULL)) ||
       (e = clGetDeviceInfo(c->device, CL_DEVICE_MAX_WORK_GROUP_SIZE, sizeof c->max_group, &c->max_group, NULL)) ||
-      (e = clGetDeviceInfo(c->device, CL_DEVICE_MAX_WORK_ITEM_SIZES, sizeof c->max_items, c->max_items, NULL)) ||
+      (e = clGetDeviceInfo(c->device, CL_DEVICE_MAX_WORK_ITEM_SIZES, sizeof items, items, NULL)) ||
       (e = clGetDeviceInfo(c->device, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof c->max_alloc, &c->max_alloc, NULL)) ||
       (e = clGetDeviceInfo(c->device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof c->global_mem, &c->global_mem, NULL)))
     st = cl_fail(err, c->name, "clGetDeviceInfo", e);
+  memcpy(c->max_items, items, sizeof c->max_items);
   if (st == LSM_OK && !available)
     st = lsm_fail(err, LSM_ERR_UNSUPPORTED, NULL, "OpenCL: %s: the device is not available", c->name);
   if (st == LSM_OK && !compiler)

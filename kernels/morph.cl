@@ -155,7 +155,7 @@ __kernel void lsm_reinit_step(__global float *next, __global const float *phi,
  * loop).  Each work-group combines its work-items' values (LSM_CL_COMBINE) and
  * writes partial[group_id(1) * num_groups(0) + group_id(0)]; the host finishes. */
 
-/* Combining a work-group's values scratch[0..n) (n a power of two, >= 8) with
+/* Combining a work-group's values scratch[0..n) (n a power of two) with
  * op into `result`, written by work-item 0.  GPUs: a tree in local memory.
  * CPUs (-DLSM_CL_SERIAL_COMBINE): work-item 0 alone, eight lanes at a time,
  * which saves PoCL a barrier per tree level.  op must accept float and float8
@@ -166,11 +166,17 @@ __kernel void lsm_reinit_step(__global float *next, __global const float *phi,
   do {                                                                                     \
     barrier(CLK_LOCAL_MEM_FENCE);                                                          \
     if ((lid) == 0) {                                                                      \
-      float8 acc_ = vload8(0, (scratch));                                                  \
-      for (int q_ = 8; q_ < (n); q_ += 8) acc_ = op(acc_, vload8(0, (scratch) + q_));      \
-      float4 a4_ = op(acc_.lo, acc_.hi);                                                   \
-      float2 a2_ = op(a4_.lo, a4_.hi);                                                     \
-      (result) = op(a2_.x, a2_.y);                                                         \
+      float acc_ = (scratch)[0];                                                           \
+      int q_ = 1;                                                                          \
+      if ((n) >= 8) {                                                                      \
+        float8 v_ = vload8(0, (scratch));                                                  \
+        for (q_ = 8; q_ + 8 <= (n); q_ += 8) v_ = op(v_, vload8(0, (scratch) + q_));       \
+        const float4 v4_ = op(v_.lo, v_.hi);                                               \
+        const float2 v2_ = op(v4_.lo, v4_.hi);                                             \
+        acc_ = op(v2_.x, v2_.y);                                                           \
+      }                                                                                    \
+      for (; q_ < (n); ++q_) acc_ = op(acc_, (scratch)[q_]);                               \
+      (result) = acc_;                                                                     \
     }                                                                                      \
   } while (0)
 #else

@@ -27,7 +27,7 @@
 #include "lsm_status.h"
 
 #define LSM_PREVIEW_XY 160
-#define LSM_PREVIEW_Z 320
+#define LSM_PREVIEW_Z 128
 
 typedef struct lsm_preview lsm_preview;
 

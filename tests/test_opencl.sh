@@ -39,9 +39,23 @@ done
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-opencl.XXXXXX") || exit 1
 trap 'rm -rf "$TMP"' EXIT
 trap 'exit 1' INT TERM
-# The kernel cache of these runs lives and dies with the temporary folder.
+# The kernel cache of these runs lives and dies with the temporary folder;
+# PoCL's own cache (also under XDG_CACHE_HOME) stays where it was.
+if [ -z "${POCL_CACHE_DIR:-}" ]; then
+  case ${XDG_CACHE_HOME:-} in
+  /*) POCL_CACHE_DIR="$XDG_CACHE_HOME/pocl/kcache" ;;
+  *) [ -n "${HOME:-}" ] && POCL_CACHE_DIR="$HOME/.cache/pocl/kcache" ;;
+  esac
+  [ -n "${POCL_CACHE_DIR:-}" ] && export POCL_CACHE_DIR
+fi
 XDG_CACHE_HOME="$TMP/cache"
 export XDG_CACHE_HOME
+# Under SANITIZE=1: PoCL, its LLVM and the OpenCL loader keep allocations until
+# exit; LeakSanitizer is told to ignore those (leaks of lsmorph's own code are
+# still reported).
+printf 'leak:libpocl.so\nleak:libLLVM\nleak:libOpenCL.so\nleak:libclang\n' >"$TMP/lsan.supp"
+LSAN_OPTIONS="suppressions=$TMP/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+export LSAN_OPTIONS
 
 # ---- devices -------------------------------------------------------------------------------
 "$LSM" devices >"$TMP/dev" 2>"$TMP/e"
