@@ -63,21 +63,28 @@ static int nrrd_header(char out[NRRD_HEADER_BYTES + 1], const lsm_nrrd_writer *w
 
 static int finite_positive(double v) { return isfinite(v) && v > 0.0; }
 
+lsm_status lsm_volume_check_geometry(const char *where, int nx, int ny, double sx, double sy,
+                                     double sz, double ox, double oy, double oz, lsm_err *err) {
+  if (nx <= 0 || ny <= 0)
+    return lsm_fail(err, LSM_ERR_INPUT, where, "volume slice size %dx%d is not positive", nx, ny);
+  if (!finite_positive(sx) || !finite_positive(sy) || !finite_positive(sz))
+    return lsm_fail(err, LSM_ERR_INPUT, where, "spacings %g %g %g must be finite and positive", sx,
+                    sy, sz);
+  if (!isfinite(ox) || !isfinite(oy) || !isfinite(oz))
+    return lsm_fail(err, LSM_ERR_INPUT, where, "origin %g %g %g is not finite", ox, oy, oz);
+  size_t bytes;
+  if (!lsm_size_mul3((size_t)nx, (size_t)ny, 4, &bytes))
+    return lsm_fail(err, LSM_ERR_LIMIT, where, "slice size %dx%d is too large", nx, ny);
+  return LSM_OK;
+}
+
 lsm_status lsm_nrrd_open(const char *path, int nx, int ny, double sx, double sy,
                          double sz, double ox, double oy, double oz,
                          lsm_nrrd_writer **out, lsm_err *err) {
   if (out) *out = NULL;
   if (!path || !out) return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to the NRRD writer");
-  if (nx <= 0 || ny <= 0)
-    return lsm_fail(err, LSM_ERR_INPUT, path, "volume slice size %dx%d is not positive", nx, ny);
-  if (!finite_positive(sx) || !finite_positive(sy) || !finite_positive(sz))
-    return lsm_fail(err, LSM_ERR_INPUT, path, "spacings %g %g %g must be finite and positive", sx,
-                    sy, sz);
-  if (!isfinite(ox) || !isfinite(oy) || !isfinite(oz))
-    return lsm_fail(err, LSM_ERR_INPUT, path, "origin %g %g %g is not finite", ox, oy, oz);
-  size_t slice_bytes;
-  if (!lsm_size_mul3((size_t)nx, (size_t)ny, 4, &slice_bytes))
-    return lsm_fail(err, LSM_ERR_LIMIT, path, "slice size %dx%d is too large", nx, ny);
+  LSM_TRY(lsm_volume_check_geometry(path, nx, ny, sx, sy, sz, ox, oy, oz, err));
+  const size_t slice_bytes = (size_t)nx * (size_t)ny * 4;
 
   lsm_nrrd_writer *w = calloc(1, sizeof *w);
   if (!w) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate the NRRD writer");

@@ -218,16 +218,8 @@ lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values 
     return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad format set 0x%x", formats);
   if (values != LSM_VALUES_SDF && values != LSM_VALUES_MASK)
     return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad value kind %d", (int)values);
-  if (nx <= 0 || ny <= 0)
-    return lsm_fail(err, LSM_ERR_INPUT, dir, "volume slice size %dx%d is not positive", nx, ny);
-  if (!finite_positive(sx) || !finite_positive(sy) || !finite_positive(sz))
-    return lsm_fail(err, LSM_ERR_INPUT, dir, "spacings %g %g %g must be finite and positive", sx,
-                    sy, sz);
-  if (!isfinite(ox) || !isfinite(oy) || !isfinite(oz))
-    return lsm_fail(err, LSM_ERR_INPUT, dir, "origin %g %g %g is not finite", ox, oy, oz);
-  size_t bytes;
-  if (!lsm_size_mul3((size_t)nx, (size_t)ny, 4, &bytes))
-    return lsm_fail(err, LSM_ERR_LIMIT, dir, "slice size %dx%d is too large", nx, ny);
+  LSM_TRY(lsm_volume_check_geometry(dir, nx, ny, sx, sy, sz, ox, oy, oz, err));
+  const size_t bytes = (size_t)nx * (size_t)ny * 4;
 
   lsm_volume_writer *w = calloc(1, sizeof *w);
   if (!w) return lsm_fail(err, LSM_ERR_NOMEM, dir, "cannot allocate the volume writer");

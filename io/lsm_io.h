@@ -98,6 +98,11 @@ typedef struct lsm_nrrd_writer lsm_nrrd_writer;
 lsm_status lsm_nrrd_open(const char *path, int nx, int ny, double sx, double sy,
                          double sz, double ox, double oy, double oz,
                          lsm_nrrd_writer **out, lsm_err *err);
+/* Checks the geometry every volume writer needs: positive slice size whose
+ * byte count does not overflow, finite positive spacings, finite origin. */
+lsm_status lsm_volume_check_geometry(const char *where, int nx, int ny, double sx, double sy,
+                                     double sz, double ox, double oy, double oz, lsm_err *err);
+
 /* Appends one slice: nx*ny floats, row-major (x fastest), row 0 first. */
 lsm_status lsm_nrrd_write_slice(lsm_nrrd_writer *w, const float *slice, lsm_err *err);
 /* Number of slices written so far. */
