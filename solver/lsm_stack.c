@@ -894,9 +894,11 @@ static lsm_status run_per_iteration(stack_run *r, lsm_pair_stats *stats, lsm_err
 
 /* ---- gaps spread over processes ---------------------------------------------------------- */
 
-/* This process computes gap i into res (slices, statistics or the error). */
+/* Computes gap i into res (its slices, statistics or error) with its own
+ * buffers, on `threads` threads: one task of the gap-parallel and of the
+ * distributed runs. */
 static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, double z0,
-                        double dz, double eps, lsm_gap_result *res) {
+                        double dz, double eps, int threads, lsm_gap_result *res) {
   memset(res, 0, sizeof *res);
   lsm_err e;
   lsm_err_clear(&e);
@@ -904,6 +906,7 @@ static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, d
   lsm_slice_sink buffered = {res, buffer_emit};
   task.sink = &buffered;
   task.progress = NULL;
+  if (threads > 0) task.morph.threads = threads;
   task.image_phi = NULL;
   task.out = lsm_alloc((size_t)base->width * (size_t)base->height, sizeof(float), &e, "output slice");
   lsm_status st = task.out ? lsm_grid_create(base->width, base->height,
@@ -949,7 +952,7 @@ static lsm_status run_distributed(stack_run *r, const gap_plan *plan, double z0,
     lsm_gap_result res;
     memset(&res, 0, sizeof res);
     if (owner == t->rank) {
-      compute_gap(r, i, plan ? &plan[i] : NULL, z0, dz, eps, &res);
+      compute_gap(r, i, plan ? &plan[i] : NULL, z0, dz, eps, 0, &res);
       res.stats.rank = t->rank;
       if (t->rank != 0) {
         st = t->send(t->ctx, i, &res, err);
@@ -1043,29 +1046,20 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
     for (size_t i = 0; i < gaps; ++i) {
       lsm_gap_result buf;
       memset(&buf, 0, sizeof buf);
-      lsm_err e;
-      lsm_err_clear(&e);
-      lsm_status ts = LSM_OK;
       int stop;
 #pragma omp atomic read
       stop = failed;
-      stack_run task = r;
-      lsm_slice_sink buffered = {&buf, buffer_emit};
-      task.sink = &buffered;
-      task.progress = NULL;
-      task.morph.threads = 1;
-      task.out = NULL;
-      task.image_phi = NULL;
-      if (!stop) {
-        task.out = lsm_alloc((size_t)width * (size_t)height, sizeof(float), &e, "output slice");
-        ts = task.out ? lsm_grid_create(width, height, (float)opts->pixel_size,
-                                        (float)opts->pixel_size, &task.image_phi, &e)
-                      : e.status;
-      }
-      if (!stop && ts == LSM_OK) ts = gap_task(&task, i, &plan[i], z0, dz, eps, &stats[i], &e);
+      if (!stop) compute_gap(&r, i, &plan[i], z0, dz, eps, 1, &buf);
 #pragma omp ordered
       {
-        if (!failed && ts == LSM_OK) ts = buffer_replay(&r, &buf, &e);
+        lsm_err e;
+        lsm_err_clear(&e);
+        lsm_status ts = stop ? LSM_OK : buf.status;
+        if (ts != LSM_OK) lsm_fail(&e, ts, NULL, "%s", buf.msg);
+        if (!failed && !stop && ts == LSM_OK) {
+          stats[i] = buf.stats;
+          ts = buffer_replay(&r, &buf, &e);
+        }
         if (!failed && ts != LSM_OK) {
           first_status = ts;
           first_err = e;
@@ -1074,8 +1068,6 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
         }
       }
       lsm_gap_result_free(&buf);
-      lsm_grid_destroy(&task.image_phi);
-      free(task.out);
     }
     if (failed) {
       st = first_status;
