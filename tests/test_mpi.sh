@@ -6,7 +6,7 @@
 # into build-mpi/.  Argument: the normal build folder.
 set -u
 BUILD=${1:-build}
-MPIBUILD=build-mpi
+MPIBUILD="${BUILD%/}-mpi" # its own folder per configuration (SANITIZE=1 passes through MAKEFLAGS)
 pass=0
 fail=0
 check() { # name, command...
