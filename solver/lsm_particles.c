@@ -394,21 +394,28 @@ __attribute__((target_clones("avx2", "default")))
 #endif
 static long long detect(ptrdiff_t n, const float *restrict px, const float *restrict py,
                         const int8_t *restrict sign, const float *restrict radius,
-                        uint8_t *restrict state, const lsm_grid *phi, int nt) {
+                        uint8_t *restrict state, const lsm_grid *phi, float far,
+                        long long *strays, int nt) {
   const int nx = phi->nx, ny = phi->ny;
   const ptrdiff_t stride = phi->stride;
   const float *restrict g = phi->data;
-  long long count = 0;
-#pragma omp parallel for simd num_threads(nt) schedule(static) reduction(+ : count)
+  long long count = 0, stray = 0;
+#pragma omp parallel for simd num_threads(nt) schedule(static) reduction(+ : count, stray)
   for (ptrdiff_t k = 0; k < n; ++k) {
     float fx, fy;
     const int i = lsm_pcl_locate(px[k], nx, &fx), j = lsm_pcl_locate(py[k], ny, &fy);
     const ptrdiff_t a = (ptrdiff_t)j * stride + i, b = a + stride;
     const float ph = lsm_pcl_bilinear(g[a], g[a + 1], g[b], g[b + 1], fx, fy);
     const int e = lsm_pcl_escaped(sign[k], ph, radius[k]);
-    state[k] = (uint8_t)(e ? PCL_ESCAPED : 0);
-    count += e;
+    /* Escaped by more than `far`: the front has left this particle behind
+     * (it no longer marks the interface), and correcting from it would plant
+     * a speck of the wrong sign; it is removed instead, as PLS codes do. */
+    const int lost = e && LSM_FABS(ph) > far;
+    state[k] = (uint8_t)(lost ? PCL_LEFT : (e ? PCL_ESCAPED : 0));
+    count += e && !lost;
+    stray += lost;
   }
+  *strays = stray;
   return count;
 }
 
@@ -424,7 +431,11 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
   const int nt = pls_threads(p, p->n);
 
   /* 1. detection (parallel, vectorised; each particle writes its own flag) */
-  const long long found = detect(n, p->x, p->y, p->sign, p->radius, p->state, phi, nt);
+  long long strays = 0;
+  const float far = 1.5f * (p->dx > p->dy ? p->dx : p->dy);
+  const long long found = detect(n, p->x, p->y, p->sign, p->radius, p->state, phi, far, &strays, nt);
+  p->left_pending += (size_t)strays;
+  p->stats.stray += strays;
 
   /* 2. phi_plus / phi_minus at the corners of escaped particles (serial, in
    *    particle order; max/min make the order irrelevant anyway).  phi itself
@@ -476,7 +487,7 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
     }
   }
   if (escaped)
-    for (ptrdiff_t k = 0; k < n; ++k) p->state[k] = 0;
+    for (ptrdiff_t k = 0; k < n; ++k) p->state[k] &= (uint8_t)~PCL_ESCAPED;
   p->stats.escaped_last = escaped;
   p->stats.corrected_last = corrected;
   p->stats.escaped_total += escaped;

@@ -66,7 +66,9 @@ void lsm_pls_opts_default(lsm_pls_opts *o);
 typedef struct lsm_pls_stats {
   long long seeded;          /* particles placed by all seedings (creation + reseedings) */
   long long discarded;       /* removed by attraction failure (still outside their band after 10 iterations) */
-  long long left_domain;     /* removed because advection took them out of [0,nx-1]x[0,ny-1] */
+  long long left_domain;     /* removed because advection took them out of [0,nx-1]x[0,ny-1],
+                                or because they escaped by more than 1.5 max(dx,dy) (see stray) */
+  long long stray;           /* of those, escaped too far to mark the interface */
   long long reseed_dropped;  /* live particles removed when reseeding */
   long long escaped_total;   /* escaped particles found, summed over corrections */
   long long corrected_total; /* grid values changed by corrections, summed */

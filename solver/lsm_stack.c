@@ -499,7 +499,7 @@ static void add_pls_stats(lsm_pair_stats *ps, const lsm_morph *m) {
   const lsm_pls_stats *q = m ? lsm_morph_pls_stats(m) : NULL;
   if (!q) return;
   ps->pls_seeded += q->seeded;
-  ps->pls_discarded += q->discarded + q->left_domain;
+  ps->pls_discarded += q->discarded + q->left_domain; /* left_domain includes the strays */
   ps->pls_escaped += q->escaped_total;
   ps->pls_corrected += q->corrected_total;
   ps->pls_steps += q->steps;
