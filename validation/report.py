@@ -226,8 +226,9 @@ def main():
         notes.append("there is no OpenCL backend in this lsmorph: only the C backend is "
                      "validated")
     else:
-        notes.append("this lsmorph offers `--backend %s`; only the C backend (the reference, "
-                     "the default) is validated here" % "|".join(backends))
+        notes.append("this lsmorph offers `--backend %s`; the C backend (the reference, "
+                     "the default) is validated throughout, and study 3 also runs the default "
+                     "method on OpenCL (`ls-opencl`) when a device opens" % "|".join(backends))
     if "pls" not in methods:
         notes.append("there is no particle level set (PLS) method in this lsmorph yet")
     else:

@@ -24,6 +24,10 @@ def main():
     info = {r["solid"]: r for r in vlib.read_csv(os.path.join(solids_dir, "solids.csv"))}
     METHODS = s.methods + ["nearest"]
     variants = [(m, s.method_args(m)) for m in s.methods] + [("nearest", None)]
+    if s.opencl_works():
+        # the default method on the OpenCL backend (PoCL here): same numbers expected
+        METHODS.insert(1, "ls-opencl")
+        variants.insert(1, ("ls-opencl", ["--backend", "opencl"]))
     table, csv_rows, slice_rows = [], [], []
     metrics = {}
     per_slice_all = {}
@@ -85,12 +89,12 @@ def main():
          "(pixel size 1, so output slice n is truth slice n), all other options at their "
          "defaults (run.json of the ls runs: %s). Methods: %s, and **nearest** (each "
          "held-out slice is a copy of the nearest kept slice, ties to the lower one; "
-         "computed in Python). Backend: C only%s." % (
+         "computed in Python). Backend: C%s." % (
              vlib.describe_options(metrics[(SOLIDS[0], STRIDES[0], "ls")]["options"]),
              ", ".join("**%s**%s" % (m, "" if m == "ls" else " (`--method %s`)" % m)
                        for m in s.methods),
-             " (this build offers `--backend %s`; OpenCL is not validated here)" % "|".join(s.backends)
-             if "opencl" in s.backends else " (there is no OpenCL backend yet)"))
+             "; **ls-opencl** is the default method on `--backend opencl` (%s)" % s.opencl_device
+             if s.opencl_works() else " (no OpenCL device could be opened: OpenCL not validated)"))
     if "pls" not in s.methods:
         s.md()
         s.md("PLS is not part of this run (%s)." % (

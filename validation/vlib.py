@@ -32,7 +32,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BUNNY_DIR = "/work/shared/data/bunny"
 
 
-METHOD_COLORS = {"ls": "tab:blue", "pls": "tab:green", "blend": "tab:orange",
+METHOD_COLORS = {"ls": "tab:blue", "ls-opencl": "tab:cyan", "pls": "tab:green", "blend": "tab:orange",
                  "nearest": "tab:gray"}
 
 
@@ -102,6 +102,22 @@ class Study:
                 raise StepFailed("VALIDATE_METHODS: %s not offered by this lsmorph" % ", ".join(bad))
             return want.split(",")
         return [m for m in ("ls", "pls", "blend") if m in offered]
+
+    def opencl_works(self):
+        """1 if `lsmorph devices` lists a device (cached)."""
+        if not hasattr(self, "_opencl"):
+            self._opencl = False
+            self.opencl_device = ""
+            if "opencl" in self.backends:
+                try:
+                    out = subprocess.run([self.lsmorph, "devices"], capture_output=True,
+                                         text=True, timeout=60)
+                    lines = [l.strip() for l in out.stdout.splitlines() if l.strip()]
+                    self._opencl = out.returncode == 0 and len(lines) > 0
+                    self.opencl_device = lines[-1] if lines else ""
+                except (OSError, subprocess.SubprocessError):
+                    self._opencl = False
+        return self._opencl
 
     def method_args(self, method):
         return [] if method == "ls" else ["--method", method]
