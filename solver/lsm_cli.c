@@ -134,11 +134,11 @@ static const char reconstruct_help_files[] =
     "  slices/00001.png ...   binary mask of each output slice (255 inside)\n"
     "  run.json               options, per-pair iterations, dt, CP, seconds, cells; totals\n"
     "\n"
-    "Exit status: 0 success, 1 bad input or failure, 2 usage error, 130 / 143\n"
-    "interrupted by SIGINT / SIGTERM (the process ends by that signal).  Results are\n"
-    "written to a temporary folder OUT_DIR.tmp-XXXXXX next to OUT_DIR and moved into\n"
-    "place only when complete; on any failure or interruption it is removed and an\n"
-    "earlier OUT_DIR is left as it was.\n";
+    "Exit status: 0 success, 1 bad input or failure, 2 usage error, 130 / 143 / 129\n"
+    "interrupted by SIGINT / SIGTERM / SIGHUP (the process ends by that signal).\n"
+    "Results are written to a temporary folder OUT_DIR.tmp-XXXXXX next to OUT_DIR and\n"
+    "moved into place only when complete; on any failure or interruption it is\n"
+    "removed and an earlier OUT_DIR is left as it was.\n";
 
 static const char score_help[] =
     "Usage: lsmorph score TRUTH_DIR OUT_DIR --stride K\n"

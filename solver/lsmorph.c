@@ -62,16 +62,23 @@ static volatile sig_atomic_t stop_signal = 0;
 
 static void on_stop_signal(int sig) { stop_signal = sig; }
 
-/* SIGINT and SIGTERM only set stop_signal; the run notices it before the next
- * input or output slice (and before publishing) and unwinds through the normal
- * error path, which removes the temporary folder.  SA_RESTART keeps writes in
- * progress from failing with EINTR; SA_RESETHAND makes a second signal of the
- * same kind take the default action at once (a stuck run can still be killed).
- * A signal ignored when we started (a background job of a shell without job
- * control) stays ignored. */
+/* SIGINT, SIGTERM and SIGHUP only set stop_signal; the run notices it before
+ * the next input or output slice (and before publishing) and unwinds through
+ * the normal error path, which removes the temporary folder.  SA_RESTART keeps
+ * writes in progress from failing with EINTR; SA_RESETHAND makes a second
+ * signal of the same kind take the default action at once (a stuck run can
+ * still be killed).  A signal ignored when we started (SIGINT of a background
+ * job of a shell without job control, nohup's SIGHUP) stays ignored.  SIGPIPE
+ * is ignored: progress on stderr piped into a reader that quit is not worth
+ * a half-written result. */
 static void install_stop_handlers(void) {
-  const int sigs[2] = {SIGINT, SIGTERM};
-  for (int k = 0; k < 2; ++k) {
+  struct sigaction ign;
+  memset(&ign, 0, sizeof ign);
+  ign.sa_handler = SIG_IGN;
+  sigemptyset(&ign.sa_mask);
+  sigaction(SIGPIPE, &ign, NULL);
+  const int sigs[3] = {SIGINT, SIGTERM, SIGHUP};
+  for (int k = 0; k < 3; ++k) {
     struct sigaction old, sa;
     if (sigaction(sigs[k], NULL, &old) == 0 && old.sa_handler == SIG_IGN) continue;
     memset(&sa, 0, sizeof sa);
@@ -83,7 +90,10 @@ static void install_stop_handlers(void) {
 }
 
 static const char *stop_signal_name(int sig) {
-  return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal";
+  return sig == SIGINT    ? "SIGINT"
+         : sig == SIGTERM ? "SIGTERM"
+         : sig == SIGHUP  ? "SIGHUP"
+                          : "a signal";
 }
 
 /* LSM_ERR_INTERRUPTED once a stop signal has arrived. */

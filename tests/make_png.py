@@ -3,6 +3,8 @@ the standard library (zlib, struct).  Used by tests/test_errors.sh and to make
 the fuzz seed corpus.
 
 Usage: make_png.py KIND OUT.png [SIZE [RADIUS]]
+       make_png.py - < LIST      (one "KIND OUT.png [SIZE [RADIUS]]" per line: many files
+                                  for one Python start-up)
 
 Good images (a bright disc of RADIUS pixels, default SIZE/4, centred on a
 SIZE x SIZE dark background, default SIZE 32; SIZE may also be WxH):
@@ -115,10 +117,17 @@ def good(kind, size, radius):
 
 
 def main():
-    kind, out = sys.argv[1], sys.argv[2]
-    arg = sys.argv[3] if len(sys.argv) > 3 else "32"
+    if sys.argv[1:] == ["-"]:
+        for line in sys.stdin:
+            if line.split():
+                make(*line.split())
+    else:
+        make(*sys.argv[1:])
+
+
+def make(kind, out, arg="32", radius=None):
     size = tuple(int(v) for v in arg.split("x")) if "x" in arg else (int(arg), int(arg))
-    radius = float(sys.argv[4]) if len(sys.argv) > 4 else min(size) / 4.0
+    radius = float(radius) if radius is not None else min(size) / 4.0
     if kind in HEADER:
         data = good(kind, size, radius)
     elif kind == "bad_crc":
