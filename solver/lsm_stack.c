@@ -171,7 +171,8 @@ static int window_usable(const window *w, int k) { return w->s[k] && w->s[k]->lo
 
 typedef struct frame {
   int width, height;     /* image size */
-  int pad;               /* canvas margin on every side */
+  int pad;               /* canvas margin on the left and right */
+  int pad_y;             /* canvas margin above and below */
   int dx[4], dy[4];      /* whole-pixel shifts (centroid - centre) of prev, A, B, next */
   double H;              /* height of the gap, z_B - z_A */
   double mx[2], my[2];   /* slopes of the shift path at A and B, per unit z */
@@ -248,12 +249,13 @@ static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp i
       f->my[1] = pchip_slope((float)f->H, (float)h1, (float)sy, (float)((f->dy[3] - f->dy[2]) / h1));
     }
   }
-  int m = 0;
+  int mx = 0, my = 0;
   for (int k = 0; k < 4; ++k) {
-    if (abs(f->dx[k]) > m) m = abs(f->dx[k]);
-    if (abs(f->dy[k]) > m) m = abs(f->dy[k]);
+    if (abs(f->dx[k]) > mx) mx = abs(f->dx[k]);
+    if (abs(f->dy[k]) > my) my = abs(f->dy[k]);
   }
-  f->pad = m + 2;
+  f->pad = mx + 2;
+  f->pad_y = my + 2;
   f->clamp = (float)(pixel * hypot((double)width, (double)height));
 }
 
@@ -271,7 +273,7 @@ static void frame_shift(const frame *f, double s, double *shx, double *shy) {
 static void frame_extract(const frame *f, const lsm_grid *work, double s, float *out) {
   double shx, shy;
   frame_shift(f, s, &shx, &shy);
-  const double ox = f->pad - shx, oy = f->pad - shy;
+  const double ox = f->pad - shx, oy = f->pad_y - shy;
   const int whole = ox == floor(ox) && oy == floor(oy);
   for (int y = 0; y < f->height; ++y)
     for (int x = 0; x < f->width; ++x) {
@@ -313,6 +315,7 @@ static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double 
   window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}};
   frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height, r->opts->pixel_size);
   f.pad = 0;
+  f.pad_y = 0;
   frame_extract(&f, r->image_phi, 0.0, r->out);
   return emit(r, z, (long)index, err);
 }
@@ -347,7 +350,7 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
     const int k = side ? 3 : 0; /* the neighbour: next for B, prev for A */
     const int usable = window_usable(w, k);
     if (usable)
-      st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad - g->f.dy[k], nb, err);
+      st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], nb, err);
     if (st != LSM_OK) break;
     const float hn = usable ? (float)fabs(w->z[k] - w->z[side ? 2 : 1]) : 1.0f;
     lsm_grid *m = side ? g->slope_b : g->slope_a;
@@ -374,12 +377,12 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   const lsm_stack_opts *o = r->opts;
   const slice *a = w->s[1], *b = w->s[2];
   frame_setup(&g->f, w, o->align, o->interp, r->width, r->height, o->pixel_size);
-  const int nx = r->width + 2 * g->f.pad, ny = r->height + 2 * g->f.pad;
+  const int nx = r->width + 2 * g->f.pad, ny = r->height + 2 * g->f.pad_y;
   const float h = (float)o->pixel_size;
   lsm_status st = lsm_grid_create(nx, ny, h, h, &g->phi_a, err);
   if (st == LSM_OK) st = lsm_grid_create(nx, ny, h, h, &g->phi_b, err);
-  if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad - g->f.dy[1], g->phi_a, err);
-  if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad - g->f.dy[2], g->phi_b, err);
+  if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad_y - g->f.dy[1], g->phi_a, err);
+  if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad_y - g->f.dy[2], g->phi_b, err);
   if (st == LSM_OK && o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration)
     st = gap_slopes(r, w, g, err);
   if (st != LSM_OK) {
@@ -458,7 +461,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
     if (st == LSM_OK && window_usable(w, kn)) {
       st = lsm_grid_clone(full, &nb, err);
       if (st == LSM_OK)
-        st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad - g->f.dy[kn], nb, err);
+        st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn], nb, err);
     }
     if (st == LSM_OK) {
       const float hn = nb ? (float)fabs(w->z[kn] - w->z[kf]) : 1.0f;
@@ -744,8 +747,10 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
 
 size_t lsm_stack_output_count(const double *z, size_t count, double dz) {
   if (count == 0 || !(dz > 0.0)) return 0;
-  double span = z[count - 1] - z[0];
-  return (size_t)floor(span / dz + 1e-6) + 1;
+  const double n = floor((z[count - 1] - z[0]) / dz + 1e-6);
+  if (!(n >= 0.0)) return 0;
+  if (n >= (double)SIZE_MAX / 2) return SIZE_MAX / 2; /* callers refuse such runs */
+  return (size_t)n + 1;
 }
 
 /* ---- the gaps of the default mode, one task each ------------------------------------------ */

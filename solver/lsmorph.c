@@ -481,7 +481,10 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
     }
   }
   if (cli->stack.align != LSM_ALIGN_NONE) {
-    const uint64_t l = (uint64_t)(w > h ? w : h), canvas = ((uint64_t)w + l) * ((uint64_t)h + l);
+    /* An aligned gap pads each axis by the largest centroid shift along it
+     * (at most half the side) plus 2 cells. */
+    const uint64_t canvas = ((uint64_t)w + 2 * ((uint64_t)w / 2 + 2)) *
+                            ((uint64_t)h + 2 * ((uint64_t)h / 2 + 2));
     if (canvas / 4 > cli->max_pixels)
       return lsm_fail(err, LSM_ERR_LIMIT, src->paths[0],
                       "%dx%d slices need a working canvas of up to %llu cells with --align %s, "

@@ -136,12 +136,17 @@ expect "--max-pixels" 1 "good/1.png: image is 32x32 = 1024 pixels, more than the
   reconstruct good -o out -q --max-pixels 1000
 expect "--max-voxels" 1 "more than --max-voxels 3000" out reconstruct good -o out -q --max-voxels 3000
 expect "output slice count overflow" 1 "more than --max-voxels" out reconstruct good -o out -q --dz 1e-300
-# a 20000x1 strip: with alignment its working canvas would be 40000 x 20001 cells
+# a 20000x1 strip: an aligned gap pads each axis by up to half its side, a
+# canvas of up to 40004 x 5 cells, more than 4 x --max-pixels 20000
 expect "aligned canvas of a long strip" 1 "strip/1.png: 20000x1 slices need a working canvas" out \
-  reconstruct strip -o out -q --max-pixels 100000
-"$LSM" reconstruct strip -o out-strip -q --max-pixels 100000 --align none >/dev/null 2>"$TMP/stderr"
-rc=$?
-if [ $rc -eq 0 ]; then ok; else bad "the strip with --align none: exit $rc ($(cat "$TMP/stderr"))"; fi
+  reconstruct strip -o out -q --max-pixels 20000 --align hull
+for args in "--max-pixels 20000 --align none" "--max-pixels 100000 --align hull"; do
+  # shellcheck disable=SC2086
+  "$LSM" reconstruct strip -o out-strip -q $args >/dev/null 2>"$TMP/stderr"
+  rc=$?
+  if [ $rc -eq 0 ]; then ok; else bad "the strip with $args: exit $rc ($(cat "$TMP/stderr"))"; fi
+  rm -rf out-strip
+done
 
 # ---- heights --------------------------------------------------------------------------------------
 heights() { # heights DESC TEXT PHRASE
