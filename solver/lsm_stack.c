@@ -372,6 +372,71 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
   return st;
 }
 
+/* The halfway rule for components.  A connected component C of {phi_x <= 0}
+ * (slightly dilated, by 2 cells, so a component's front band goes with it)
+ * that does not overlap {phi_y <= 0}, and lies farther from it than its own
+ * depth, has no counterpart on the other side: it ends there, like a whole
+ * object next to an empty slice.  Inside C the
+ * other side's field is lowered to the constant R_C (C's largest depth), so
+ * the blend (1 - s) phi_x + s R_C closes C at mid-gap, and the morph erodes
+ * it at speed R_C instead of pulling it toward far-away shapes (with the
+ * distance to them as speed, a small component would vanish at once). */
+static lsm_status cap_unmatched(const lsm_grid *phi_x, lsm_grid *phi_y, lsm_err *err) {
+  const int nx = phi_x->nx, ny = phi_x->ny;
+  const size_t n = (size_t)nx * (size_t)ny;
+  const float grow = 2.0f * (phi_x->dx > phi_x->dy ? phi_x->dx : phi_x->dy);
+  int32_t *label = lsm_alloc(n, sizeof *label, err, "component labels");
+  int32_t *queue = label ? lsm_alloc(n, sizeof *queue, err, "component queue") : NULL;
+  if (!queue) {
+    free(label);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  for (size_t k = 0; k < n; ++k) label[k] = -1;
+  int32_t components = 0;
+  for (int j0 = 0; j0 < ny; ++j0)
+    for (int i0 = 0; i0 < nx; ++i0) {
+      const size_t start = (size_t)j0 * nx + i0;
+      if (label[start] >= 0 || LSM_AT(phi_x, i0, j0) > grow) continue;
+      /* breadth-first over the 8-connected component */
+      size_t head = 0, tail = 0;
+      label[start] = components;
+      queue[tail++] = (int32_t)start;
+      int matched = 0;
+      float depth = 0.0f, gap_to_other = INFINITY;
+      while (head < tail) {
+        const int32_t q = queue[head++];
+        const int i = q % nx, j = q / nx;
+        const float v = LSM_AT(phi_x, i, j), vy = LSM_AT(phi_y, i, j);
+        if (-v > depth) depth = -v;
+        if (v <= 0.0f && vy <= 0.0f) matched = 1;
+        if (v <= 0.0f && vy < gap_to_other) gap_to_other = vy;
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const int a = i + di, b = j + dj;
+            if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
+            const size_t t = (size_t)b * nx + a;
+            if (label[t] >= 0 || LSM_AT(phi_x, a, b) > grow) continue;
+            label[t] = components;
+            queue[tail++] = (int32_t)t;
+          }
+      }
+      /* A component next to the other side's shapes (closer than its own
+       * depth) branches off them: the interpolation already makes it appear
+       * or vanish by mid-gap, from the right place. */
+      if (!matched && depth > 0.0f && gap_to_other > depth)
+        for (size_t k = 0; k < tail; ++k) {
+          const int i = queue[k] % nx, j = queue[k] / nx;
+          float *y = &LSM_AT(phi_y, i, j);
+          if (*y > depth) *y = depth;
+        }
+      components++;
+    }
+  free(queue);
+  free(label);
+  lsm_grid_fill_ghosts(phi_y);
+  return LSM_OK;
+}
+
 static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err) {
   memset(g, 0, sizeof *g);
   const lsm_stack_opts *o = r->opts;
@@ -383,6 +448,14 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   if (st == LSM_OK) st = lsm_grid_create(nx, ny, h, h, &g->phi_b, err);
   if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad_y - g->f.dy[1], g->phi_a, err);
   if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad_y - g->f.dy[2], g->phi_b, err);
+  if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND) {
+    /* (blend stays the classic baseline, without this rule)
+     * both directions see the original sets: A's components against B's
+     * inside, then B's against A's (lowering phi_b inside A's unmatched
+     * components leaves it positive there, so B's inside is unchanged) */
+    st = cap_unmatched(g->phi_a, g->phi_b, err);
+    if (st == LSM_OK) st = cap_unmatched(g->phi_b, g->phi_a, err);
+  }
   if (st == LSM_OK && o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration)
     st = gap_slopes(r, w, g, err);
   if (st != LSM_OK) {

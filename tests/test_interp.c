@@ -295,6 +295,57 @@ static void test_per_iteration_empty_identical(void **state) {
   record_free(&rec);
 }
 
+/* Two discs far apart, then only the big one: the small disc has no
+ * counterpart and ends near mid-gap (the halfway rule per component); plain
+ * interpolation of the signed distances would close it at s = r / (r + D),
+ * here about 0.14. */
+typedef struct two_disc_source {
+  int size;
+} two_disc_source;
+
+static lsm_status two_disc_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
+  two_disc_source *d = ctx;
+  LSM_TRY(lsm_mask_create(d->size, d->size, out, err));
+  for (int y = 0; y < d->size; ++y)
+    for (int x = 0; x < d->size; ++x) {
+      int big = hypot(x - 30.0, y - 48.0) <= 20.0;
+      int small = index == 0 && hypot(x - 80.0, y - 48.0) <= 10.0;
+      out->pixels[(size_t)y * d->size + x] = (uint8_t)(big || small);
+    }
+  return LSM_OK;
+}
+
+static void test_component_halfway(void **state) {
+  (void)state;
+  const double z[2] = {0.0, 16.0};
+  two_disc_source src = {96};
+  for (int method = 0; method < 2; ++method) {
+    lsm_stack_opts o;
+    lsm_stack_opts_default(&o);
+    o.method = method ? LSM_METHOD_PLS : LSM_METHOD_LS;
+    lsm_slice_source s = {&src, 2, z, two_disc_load, NULL};
+    record rec = {0};
+    lsm_slice_sink sink = {&rec, record_emit};
+    lsm_pair_stats stats[2];
+    lsm_err err;
+    lsm_err_clear(&err);
+    assert_int_equal(lsm_stack_run(&s, 96, 96, &o, &sink, stats, NULL, &err), LSM_OK);
+    double last_present = -1.0;
+    for (size_t q = 0; q < rec.count; ++q) {
+      const float *p = rec.phi + q * (size_t)96 * 96;
+      int present = 0;
+      for (int y = 30; y < 66; ++y)
+        for (int x = 62; x < 96; ++x) present |= p[(size_t)y * 96 + x] <= 0.0f;
+      if (present) last_present = rec.z[q];
+    }
+    print_message("%s: small disc last present at z = %g of 16\n", method ? "pls" : "ls",
+                  last_present);
+    assert_true(last_present >= 6.0);  /* s >= 0.375 */
+    assert_true(last_present <= 11.0); /* s <= 0.69 */
+    record_free(&rec);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cubic_monotone),
@@ -302,6 +353,7 @@ int main(void) {
       cmocka_unit_test(test_c1_ball),
       cmocka_unit_test(test_stride_one),
       cmocka_unit_test(test_per_iteration_empty_identical),
+      cmocka_unit_test(test_component_halfway),
   };
   return cmocka_run_group_tests_name("interp", tests, NULL, NULL);
 }
