@@ -1,6 +1,6 @@
 /* io_nrrd: streaming NRRD writer (attached header, raw little-endian float32).
  *
- * The header has a fixed length (NRRD_HEADER_BYTES): a padding comment line
+ * The header has a fixed length (LSM_NRRD_HEADER_BYTES): a padding comment line
  * absorbs the difference between the provisional header written at open (slice
  * count 0) and the final one written by lsm_nrrd_finish, which seeks back to
  * offset 0 and rewrites it in place.
@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define NRRD_HEADER_BYTES 512
+#define NRRD_HEADER_BYTES LSM_NRRD_HEADER_BYTES
 
 struct lsm_nrrd_writer {
   FILE *fp;
@@ -26,29 +26,29 @@ struct lsm_nrrd_writer {
   int failed;         /* a write failed: finish refuses */
 };
 
-/* Builds the exact NRRD_HEADER_BYTES-byte header into out (plus a NUL).
- * Returns 0 if the fields do not fit (cannot happen with %.17g numbers). */
-static int nrrd_header(char out[NRRD_HEADER_BYTES + 1], const lsm_nrrd_writer *w, size_t nz,
-                       double sz) {
-  char body[NRRD_HEADER_BYTES + 1];
+size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size_t nz,
+                       double sx, double sy, double sz, double ox, double oy, double oz) {
+  char body[LSM_NRRD_HEADER_BYTES + 1];
+  if (cap < LSM_NRRD_HEADER_BYTES + 1) return 0;
   int len = snprintf(body, sizeof body,
                      "NRRD0004\n"
                      "# Complete NRRD file format specification at:\n"
                      "# http://teem.sourceforge.net/nrrd/format.html\n"
-                     "# written by lsmorph\n"
-                     "type: float\n"
+                     "# written by lsmorph%s\n"
+                     "type: %s\n"
                      "dimension: 3\n"
                      "space dimension: 3\n"
                      "sizes: %d %d %zu\n"
                      "space directions: (%.17g,0,0) (0,%.17g,0) (0,0,%.17g)\n"
                      "space origin: (%.17g,%.17g,%.17g)\n"
                      "kinds: domain domain domain\n"
-                     "endian: little\n"
+                     "%s"
                      "encoding: raw\n",
-                     w->nx, w->ny, nz, w->sx, w->sy, sz, w->ox, w->oy, w->oz);
+                     is_float ? "" : ": mask, 255 inside, 0 outside", is_float ? "float" : "uchar",
+                     nx, ny, nz, sx, sy, sz, ox, oy, oz, is_float ? "endian: little\n" : "");
   /* then "# " + dots + "\n" + "\n" (the blank line that ends the header) */
-  if (len < 0 || (size_t)len + 4 > NRRD_HEADER_BYTES) return 0;
-  size_t pad = NRRD_HEADER_BYTES - (size_t)len - 4;
+  if (len < 0 || (size_t)len + 4 > LSM_NRRD_HEADER_BYTES) return 0;
+  size_t pad = LSM_NRRD_HEADER_BYTES - (size_t)len - 4;
   memcpy(out, body, (size_t)len);
   char *p = out + len;
   *p++ = '#';
@@ -58,7 +58,14 @@ static int nrrd_header(char out[NRRD_HEADER_BYTES + 1], const lsm_nrrd_writer *w
   *p++ = '\n';
   *p++ = '\n';
   *p = '\0';
-  return 1;
+  return LSM_NRRD_HEADER_BYTES;
+}
+
+/* The float header of this writer. */
+static int nrrd_header(char out[LSM_NRRD_HEADER_BYTES + 1], const lsm_nrrd_writer *w, size_t nz,
+                       double sz) {
+  return lsm_nrrd_header(out, LSM_NRRD_HEADER_BYTES + 1, 1, w->nx, w->ny, nz, w->sx, w->sy, sz,
+                         w->ox, w->oy, w->oz) != 0;
 }
 
 static int finite_positive(double v) { return isfinite(v) && v > 0.0; }

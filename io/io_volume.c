@@ -93,41 +93,11 @@ size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap) {
   return n;
 }
 
-/* ---- the NRRD header for mask volumes (uchar) ------------------------------------------ */
+/* ---- the NRRD header for mask volumes (uchar): io_nrrd.c builds it ---------------------- */
 
-#define NRRD_U8_HEADER_BYTES 512
-
-/* Same layout as io_nrrd.c's float header: a padding comment absorbs the
- * difference between the provisional and the final header. */
 static size_t nrrd_u8_header(char *out, size_t cap, const lsm_volume_info *v) {
-  char body[NRRD_U8_HEADER_BYTES + 1];
-  if (cap < NRRD_U8_HEADER_BYTES + 1) return 0;
-  int len = snprintf(body, sizeof body,
-                     "NRRD0004\n"
-                     "# Complete NRRD file format specification at:\n"
-                     "# http://teem.sourceforge.net/nrrd/format.html\n"
-                     "# written by lsmorph: mask, 255 inside, 0 outside\n"
-                     "type: uchar\n"
-                     "dimension: 3\n"
-                     "space dimension: 3\n"
-                     "sizes: %d %d %zu\n"
-                     "space directions: (%.17g,0,0) (0,%.17g,0) (0,0,%.17g)\n"
-                     "space origin: (%.17g,%.17g,%.17g)\n"
-                     "kinds: domain domain domain\n"
-                     "encoding: raw\n",
-                     v->nx, v->ny, v->nz, v->sx, v->sy, v->sz, v->ox, v->oy, v->oz);
-  if (len < 0 || (size_t)len + 4 > NRRD_U8_HEADER_BYTES) return 0;
-  size_t pad = NRRD_U8_HEADER_BYTES - (size_t)len - 4;
-  memcpy(out, body, (size_t)len);
-  char *p = out + len;
-  *p++ = '#';
-  *p++ = ' ';
-  memset(p, '.', pad);
-  p += pad;
-  *p++ = '\n';
-  *p++ = '\n';
-  *p = '\0';
-  return NRRD_U8_HEADER_BYTES;
+  return lsm_nrrd_header(out, cap, 0, v->nx, v->ny, v->nz, v->sx, v->sy, v->sz, v->ox, v->oy,
+                         v->oz);
 }
 
 /* ---- the writer ------------------------------------------------------------------------- */

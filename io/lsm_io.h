@@ -98,6 +98,16 @@ typedef struct lsm_nrrd_writer lsm_nrrd_writer;
 lsm_status lsm_nrrd_open(const char *path, int nx, int ny, double sx, double sy,
                          double sz, double ox, double oy, double oz,
                          lsm_nrrd_writer **out, lsm_err *err);
+/* Length of every NRRD header lsmorph writes: a padding comment absorbs the
+ * difference between the provisional and the final header. */
+#define LSM_NRRD_HEADER_BYTES 512
+
+/* Builds the fixed-length NRRD header (and a NUL) into out: raw float32
+ * little endian (is_float) or uchar, sizes nx ny nz, space directions and
+ * origin.  Returns LSM_NRRD_HEADER_BYTES, or 0 if cap is too small. */
+size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size_t nz,
+                       double sx, double sy, double sz, double ox, double oy, double oz);
+
 /* Checks the geometry every volume writer needs: positive slice size whose
  * byte count does not overflow, finite positive spacings, finite origin. */
 lsm_status lsm_volume_check_geometry(const char *where, int nx, int ny, double sx, double sy,
