@@ -344,7 +344,24 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   json_number(f, wall);
   fprintf(f, ", \"cell_updates\": %lld, \"cells_per_second\": ", updates);
   json_number(f, seconds > 0 ? (double)updates / seconds : NAN);
-  fputs("}\n}\n", f);
+  /* per process (MPI rank): how many gaps it ran and their solver seconds */
+  int ranks = 1;
+  for (size_t k = 0; k + 1 < src->count; ++k)
+    if (stats[k].rank + 1 > ranks) ranks = stats[k].rank + 1;
+  fputs("},\n  \"ranks\": [", f);
+  for (int q = 0; q < ranks; ++q) {
+    size_t gaps = 0;
+    double rank_seconds = 0.0;
+    for (size_t k = 0; k + 1 < src->count; ++k)
+      if (stats[k].rank == q) {
+        gaps++;
+        rank_seconds += stats[k].seconds;
+      }
+    fprintf(f, "%s{\"rank\": %d, \"gaps\": %zu, \"seconds\": ", q ? ", " : "", q, gaps);
+    json_number(f, rank_seconds);
+    fputc('}', f);
+  }
+  fputs("]\n}\n", f);
   int bad = ferror(f);
   if (fclose(f) != 0 || bad) return lsm_fail(err, LSM_ERR_IO, path, "write failed");
   return LSM_OK;
