@@ -34,6 +34,7 @@
 #include "solver/lsm_morph.h"
 #include "solver/lsm_scheme.h"
 #include "solver/lsm_status.h"
+#include "validation/vcsv.h"
 
 #define DOMAIN_HALF 32.0
 #define N_TIMES 3
@@ -242,26 +243,6 @@ static int parse_args(int argc, char **argv, options *o) {
     }
   }
   return o->out_dir != NULL;
-}
-
-static FILE *open_csv(const char *dir, const char *name, const char *header, lsm_err *err) {
-  char path[4200];
-  snprintf(path, sizeof path, "%s/%s", dir, name);
-  FILE *f = fopen(path, "w");
-  if (!f) {
-    lsm_fail(err, LSM_ERR_IO, path, "cannot create");
-    return NULL;
-  }
-  fprintf(f, "%s\n", header);
-  return f;
-}
-
-static lsm_status close_csv(FILE *f, lsm_status st, lsm_err *err) {
-  if (!f) return st;
-  int bad = ferror(f);
-  if ((fclose(f) != 0 || bad) && st == LSM_OK)
-    st = lsm_fail(err, LSM_ERR_IO, NULL, "write failed");
-  return st;
 }
 
 int main(int argc, char **argv) {

@@ -31,6 +31,7 @@
 #include "solver/lsm_scheme.h"
 #include "solver/lsm_sdf.h"
 #include "solver/lsm_status.h"
+#include "validation/vcsv.h"
 
 #define BAND 2.0
 #define T_MAX 60.0
@@ -151,26 +152,6 @@ done:
   lsm_morph_destroy(&m);
   lsm_grid_destroy(&pa);
   lsm_grid_destroy(&pb);
-  return st;
-}
-
-static FILE *open_csv(const char *dir, const char *name, const char *header, lsm_err *err) {
-  char path[4200];
-  snprintf(path, sizeof path, "%s/%s", dir, name);
-  FILE *f = fopen(path, "w");
-  if (!f) {
-    lsm_fail(err, LSM_ERR_IO, path, "cannot create");
-    return NULL;
-  }
-  fprintf(f, "%s\n", header);
-  return f;
-}
-
-static lsm_status close_csv(FILE *f, lsm_status st, lsm_err *err) {
-  if (!f) return st;
-  int bad = ferror(f);
-  if ((fclose(f) != 0 || bad) && st == LSM_OK)
-    st = lsm_fail(err, LSM_ERR_IO, NULL, "write failed");
   return st;
 }
 
