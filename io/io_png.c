@@ -106,10 +106,10 @@ static uint32_t sample_at(png_const_bytep p, int wide) {
 }
 
 /* One row of 8- or 16-bit G, GA, RGB or RGBA samples to 0/1.  Foreground when
- * luminance*alpha/maxval >= (maxval+1)/2, computed exactly in integers with
- * Rec. 709 weights scaled by 10000. */
+ * luminance*alpha/maxval >= (maxval+1)/2 (or > 0 with nonzero), computed
+ * exactly in integers with Rec. 709 weights scaled by 10000. */
 static void convert_row(png_const_bytep row, png_uint_32 width, int channels, int depth,
-                        int invert, uint8_t *out) {
+                        int invert, int nonzero, uint8_t *out) {
   const int wide = depth == 16;
   const size_t step = (size_t)(wide ? 2 : 1);
   const uint64_t maxval = wide ? 65535u : 255u;
@@ -125,7 +125,7 @@ static void convert_row(png_const_bytep row, png_uint_32 width, int channels, in
             722u * (uint64_t)sample_at(p + 2 * step, wide);
     }
     if (has_alpha) alpha = sample_at(p + (size_t)(channels - 1) * step, wide);
-    int bright = lum * alpha * 2u >= limit;
+    int bright = nonzero ? lum * alpha > 0u : lum * alpha * 2u >= limit;
     out[x] = (uint8_t)(invert ? !bright : bright);
   }
 }
@@ -181,6 +181,7 @@ static int png_read_guarded(png_reader *r) {
   r->mask.width = (int)r->width;
   r->mask.height = (int)r->height;
   int invert = r->opts ? r->opts->invert : 0;
+  int nonzero = r->opts ? r->opts->nonzero : 0;
 
   if (passes <= 1) {
     r->buffer = malloc(rowbytes);
@@ -190,7 +191,7 @@ static int png_read_guarded(png_reader *r) {
     }
     for (png_uint_32 y = 0; y < r->height; ++y) {
       png_read_row(r->png, r->buffer, NULL);
-      convert_row(r->buffer, r->width, channels, depth, invert,
+      convert_row(r->buffer, r->width, channels, depth, invert, nonzero,
                   r->mask.pixels + (size_t)y * r->width);
     }
   } else {
@@ -213,7 +214,7 @@ static int png_read_guarded(png_reader *r) {
     for (png_uint_32 y = 0; y < r->height; ++y) r->rows[y] = r->buffer + (size_t)y * rowbytes;
     png_read_image(r->png, r->rows);
     for (png_uint_32 y = 0; y < r->height; ++y)
-      convert_row(r->rows[y], r->width, channels, depth, invert,
+      convert_row(r->rows[y], r->width, channels, depth, invert, nonzero,
                   r->mask.pixels + (size_t)y * r->width);
   }
   png_read_end(r->png, NULL); /* checks the rest of the image data and CRCs */
@@ -351,7 +352,7 @@ lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_png_re
 lsm_status lsm_png_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
                                lsm_err *err) {
   png_reader r;
-  lsm_png_read_opts opts = {0, max_pixels};
+  lsm_png_read_opts opts = {0, max_pixels, 0};
   r.opts = &opts;
   r.header_only = 1;
   lsm_status st = png_read_common(path, &r, err);

@@ -27,6 +27,8 @@
 typedef struct lsm_png_read_opts {
   int invert;          /* 1: foreground is dark (luminance < 50 %) */
   uint64_t max_pixels; /* refuse images with more pixels (0 = no limit) */
+  int nonzero;         /* 1: foreground is any non-zero luminance (label masks
+                          stored as 0/1); with invert, exactly zero */
 } lsm_png_read_opts;
 
 /* Reads a PNG of any bit depth (1..16) and colour type (gray, gray+alpha, RGB,

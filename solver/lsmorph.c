@@ -119,6 +119,36 @@ typedef struct png_source {
   lsm_png_read_opts read;
 } png_source;
 
+/* Foreground rule for a stack: luminance >= 50 % (the default), unless no
+ * slice has a single such pixel while some pixel is non-zero: label masks
+ * stored as 0/1 would otherwise all read as empty.  Then any non-zero pixel is
+ * foreground (with --invert: any zero pixel), and a note says so.  Reads
+ * slices only until the first non-empty one, so a normal stack costs one or
+ * two reads. */
+static lsm_status pick_foreground(char **paths, size_t count, lsm_png_read_opts *ro, int quiet,
+                                  const char *dir, lsm_err *err) {
+  for (int pass = 0; pass < 2; ++pass) {
+    ro->nonzero = pass;
+    for (size_t k = 0; k < count; ++k) {
+      lsm_mask m = {0, 0, NULL};
+      LSM_TRY(lsm_png_read_mask(paths[k], ro, &m, err));
+      const size_t inside = lsm_mask_count(&m), all = (size_t)m.width * (size_t)m.height;
+      lsm_mask_free(&m);
+      /* with --invert a 0/1 mask reads as all-foreground, not as empty */
+      if (inside > 0 && inside < all) {
+        if (pass && !quiet)
+          fprintf(stderr,
+                  "lsmorph: note: %s: no pixel reaches 50 %% luminance in any slice; reading "
+                  "non-zero pixels as %s (label masks stored as 0/1)\n",
+                  dir, ro->invert ? "background" : "foreground");
+        return LSM_OK;
+      }
+    }
+  }
+  ro->nonzero = 0; /* every slice really is empty (or full) */
+  return LSM_OK;
+}
+
 static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
   png_source *ps = ctx;
   LSM_TRY(check_stop(err));
@@ -560,7 +590,7 @@ static void name_out_not_tmp(lsm_err *err, const char *tmp, const char *out_dir)
  * rank 0, which reads the same input, checks it, and writes everything. */
 static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *transport,
                                      lsm_err *err) {
-  png_source src = {NULL, 0, {cli->invert, cli->max_pixels}};
+  png_source src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
   double *z = NULL;
   size_t nz = 0;
   lsm_pair_stats *stats = NULL;
@@ -582,6 +612,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
     }
   }
   if (st == LSM_OK) st = lsm_png_read_size(src.paths[0], &width, &height, err);
+  if (st == LSM_OK) st = pick_foreground(src.paths, src.count, &src.read, 1, cli->slice_dir, err);
   const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
   cli->stack.morph.threads = threads;
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
@@ -607,7 +638,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   if (lsm_mpi_rank(mpi) != 0) return reconstruct_worker(cli, lsm_mpi_transport(mpi), err);
   cli->stack.transport = lsm_mpi_transport(mpi);
   const double t_start = wall_seconds();
-  png_source src = {NULL, 0, {cli->invert, cli->max_pixels}};
+  png_source src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
   double *z = NULL;
   size_t nz = 0;
   lsm_pair_stats *stats = NULL;
@@ -633,6 +664,8 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   }
   int width = 0, height = 0;
   if (st == LSM_OK) st = check_inputs(cli, &src, z, &width, &height, err);
+  if (st == LSM_OK)
+    st = pick_foreground(src.paths, src.count, &src.read, cli->quiet, cli->slice_dir, err);
   const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
   cli->stack.morph.threads = threads;
   lsm_backend *backend = NULL;
@@ -759,11 +792,12 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
                     "%zu PNG files: --stride %d needs at least %d to hold any out", n, cli->stride,
                     cli->stride + 1);
   }
-  lsm_png_read_opts ro = {0, (uint64_t)1 << 28};
+  lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, pool_n = 0, pool_cap = 0;
   double *pool = NULL;
-  lsm_status st = LSM_OK;
+  /* truth stored as 0/1 labels is read as such (the result slices are 0/255) */
+  lsm_status st = pick_foreground(truth, n, &ro_truth, 1, cli->truth_dir, err);
   const size_t last_input = (n - 1) / (size_t)cli->stride * (size_t)cli->stride;
   for (size_t k = 0; st == LSM_OK && k <= last_input && k < n; ++k) {
     if (k % (size_t)cli->stride == 0) continue;
@@ -771,7 +805,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     snprintf(path, sizeof path, "%s/slices/%05zu.png", cli->result_dir, k + 1);
     lsm_mask a = {0}, b = {0};
     st = lsm_png_read_mask(path, &ro, &a, err);
-    if (st == LSM_OK) st = lsm_png_read_mask(truth[k], &ro, &b, err);
+    if (st == LSM_OK) st = lsm_png_read_mask(truth[k], &ro_truth, &b, err);
     lsm_slice_score s;
     if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, &pool, &pool_n, &pool_cap, err);
     if (st == LSM_OK) {

@@ -10,6 +10,7 @@ Good images (a bright disc of RADIUS pixels, default SIZE/4, centred on a
 SIZE x SIZE dark background, default SIZE 32; SIZE may also be WxH):
   gray8 gray16 gray1 graya8 rgb8 rgb16 rgba8 rgba16 palette palette_trns
   interlaced (8-bit gray, Adam7)  empty (8-bit gray, all dark)
+  label01 (8-bit gray, the disc stored as label value 1 on 0)
 Bad ones:
   bad_crc (IHDR CRC wrong)  bad_idat_crc  bad_zlib (IDAT is not zlib data)
   truncated (cut in the middle of IDAT)  no_iend  text (not a PNG)  zero (0 bytes)
@@ -61,6 +62,8 @@ def row_bytes(kind, row):
     for v in row:
         if kind in ("gray8", "interlaced", "empty"):
             out += bytes([200 if v and kind != "empty" else 10])
+        elif kind == "label01":
+            out += bytes([1 if v else 0])
         elif kind == "gray16":
             out += struct.pack(">H", 60000 if v else 1000)
         elif kind == "graya8":
@@ -81,7 +84,8 @@ def row_bytes(kind, row):
 
 
 HEADER = {  # kind: (bit depth, colour type)
-    "gray8": (8, 0), "interlaced": (8, 0), "empty": (8, 0), "gray16": (16, 0), "gray1": (1, 0),
+    "gray8": (8, 0), "interlaced": (8, 0), "empty": (8, 0), "label01": (8, 0), "gray16": (16, 0),
+    "gray1": (1, 0),
     "graya8": (8, 4), "rgb8": (8, 2), "rgb16": (16, 2), "rgba8": (8, 6), "rgba16": (16, 6),
     "palette": (8, 3), "palette_trns": (8, 3),
 }

@@ -216,4 +216,16 @@ else
   bad "natural-sort run wrote no volume.nrrd"
 fi
 
+# label masks stored as 0/1: read as non-zero foreground (with a note), the
+# same volume as the 0/255 version of the same discs
+mkdir -p "$TMP/lab01" "$TMP/lab255"
+printf 'label01 %s 48 14\nlabel01 %s 48 9\ngray8 %s 48 14\ngray8 %s 48 9\n' \
+  "$TMP/lab01/1.png" "$TMP/lab01/2.png" "$TMP/lab255/1.png" "$TMP/lab255/2.png" |
+  /usr/bin/python3 tests/make_png.py -
+"$LSM" reconstruct "$TMP/lab01" -o "$TMP/out-lab01" --spacing 4 --no-preview 2>"$TMP/lab.err"
+check "0/1 label masks: exit 0" [ $? -eq 0 ]
+check "0/1 label masks: a note says non-zero pixels are foreground" grep -q "non-zero pixels as foreground" "$TMP/lab.err"
+"$LSM" reconstruct "$TMP/lab255" -o "$TMP/out-lab255" --spacing 4 --no-preview -q
+check "0/1 label masks: same volume as 0/255 masks" cmp -s "$TMP/out-lab01/volume.nrrd" "$TMP/out-lab255/volume.nrrd"
+
 finish

@@ -159,7 +159,7 @@ static void check_png(const char *dir, const char *name, const test_png *t, int 
   char path[256];
   join(path, sizeof path, dir, name);
   write_test_png(path, t);
-  lsm_png_read_opts opts = {invert, 0};
+  lsm_png_read_opts opts = {invert, 0, 0};
   lsm_mask mask;
   lsm_err err;
   lsm_err_clear(&err);
@@ -326,7 +326,7 @@ static void test_png_roundtrip_mask(void **state) {
   assert_int_equal(h, 23);
 
   lsm_mask back;
-  lsm_png_read_opts opts = {0, 0};
+  lsm_png_read_opts opts = {0, 0, 0};
   assert_int_equal(lsm_png_read_mask(path, &opts, &back, &err), LSM_OK);
   assert_int_equal(back.width, 37);
   assert_int_equal(back.height, 23);
@@ -578,7 +578,7 @@ static void test_png_max_pixels(void **state) {
   assert_int_equal(lsm_png_write_gray8(path, px, 100, 100, &err), LSM_OK);
   free(px);
 
-  lsm_png_read_opts opts = {0, 5000};
+  lsm_png_read_opts opts = {0, 5000, 0};
   lsm_mask m = {7, 7, (uint8_t *)&m};
   assert_int_equal(lsm_png_read_mask(path, &opts, &m, &err), LSM_ERR_LIMIT);
   assert_null(m.pixels);

@@ -55,7 +55,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (data[size - 1] & 2) fix_crcs(copy, size);
   FILE *fp = fmemopen(copy, size, "rb");
   if (!fp) abort();
-  lsm_png_read_opts opts = {data[size - 1] & 1, (uint64_t)1 << 22};
+  lsm_png_read_opts opts = {data[size - 1] & 1, (uint64_t)1 << 22, (data[size - 1] >> 1) & 1};
   lsm_mask m;
   lsm_err err;
   lsm_err_clear(&err);
