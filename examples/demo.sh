@@ -17,5 +17,6 @@ echo "lsmorph demo: done."
 for set in vase candlestick; do
   n=$(wc -l < "$OUT/$set/heights.txt")
   echo "  $OUT/$set/volume.nrrd   ($n slices; signed distance, open in ParaView or 3D Slicer)"
+  echo "  $OUT/$set/preview.png, preview3d.png   (a montage of slices and a rendering)"
   echo "  $OUT/$set/slices/       (one PNG mask per slice), heights.txt, run.json"
 done
