@@ -511,10 +511,16 @@ static double cap_depth(lsm_method method, double R, double sigma) {
  * inward motion by e (its zero set is the erosion by e).
  * Cubic profile: per pixel, the monotone cubic through the slice beyond the
  * non-empty one (when there is one), the non-empty slice, and a virtual slice
- * phi + 2R at the empty one, so the end continues the trend of the slices
- * above it (C1 at the non-empty slice: a shape that is not shrinking stays
- * full longer, a shrinking one keeps shrinking); the object is cut off at
- * mid-gap (sigma >= 1/2 is empty), so the halfway rule holds either way. */
+ * phi + R at the empty one (R the slice's largest depth: the deepest point
+ * would reach zero there), so the end continues the trend of the slices above
+ * it (C1 at the non-empty slice: a shape that is not shrinking stays full
+ * longer, a shrinking one keeps shrinking); the object is cut off at mid-gap
+ * (sigma >= 1/2 is empty), so the halfway rule holds either way.  At mid-gap a
+ * steady shape is eroded by about R/2 before the cut.  phi + R was chosen over
+ * phi + 2R (a cap closing exactly at mid-gap) on synthetic stacks with the
+ * object's ends at every offset within a gap (ball, ellipsoids, cylinder,
+ * cone, bunny; every 8th and 16th slice): pooled Dice higher on all of them,
+ * e.g. ball every 16th 0.9782 -> 0.9807, cylinder 0.9373 -> 0.9441. */
 static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty,
                               const double *zs, const double *fs, size_t n, lsm_pair_stats *ps,
                               lsm_err *err) {
@@ -524,7 +530,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
   lsm_grid *work = NULL, *slope = NULL;
   LSM_TRY(lsm_grid_clone(full, &work, err));
   const double R = fmax(-(double)lsm_grid_min(full), 0.5 * full->dx);
-  const float H = (float)g->f.H, d_gap = (float)(2.0 * R / g->f.H);
+  const float H = (float)g->f.H, d_gap = (float)(R / g->f.H);
   lsm_status st = LSM_OK;
   const int cubic = o->interp == LSM_INTERP_CUBIC;
   if (cubic) {
@@ -550,8 +556,8 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
     if (cubic) {
       double h00, h10, h01, h11;
       hermite_basis(sigma, &h00, &h10, &h01, &h11);
-      /* phi(sigma) = h00 phi + h10 H m + h01 (phi + 2R) + h11 H d_gap, with h00 + h01 = 1 */
-      const float c_up = (float)(h01 * 2.0 * R + h11 * H * d_gap), c_m = (float)(h10 * H);
+      /* phi(sigma) = h00 phi + h10 H m + h01 (phi + R) + h11 H d_gap, with h00 + h01 = 1 */
+      const float c_up = (float)(h01 * R + h11 * H * d_gap), c_m = (float)(h10 * H);
       const float floor_value = sigma >= 0.5 ? 1e-3f * full->dx : -INFINITY;
       for (int j = 0; j < work->ny; ++j)
         for (int i = 0; i < work->nx; ++i)
