@@ -92,7 +92,7 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
     return LSM_OK;
   }
   lsm_stage_hook hook = {m->pls, lsm_pls_stage_hook};
-  if (m->pls) lsm_pls_begin_step(m->pls);
+  if (m->pls) lsm_pls_begin_step(m->pls, lsm_time_stages(m->opts.time));
   LSM_TRY(m->ops->step(m->state, m->opts.scheme, m->opts.time, (float)dt, m->pls ? &hook : NULL,
                        err));
   m->iterations++;

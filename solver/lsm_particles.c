@@ -1,5 +1,6 @@
 #include "lsm_particles.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,6 +27,9 @@ struct lsm_particles {
   float vmin, vmax, rmin, rmax, band;
   size_t n, cap;
   size_t left_pending; /* particles flagged PCL_LEFT since the last correction */
+  int keep_start;      /* the current step has later stages that read x0, y0 */
+  size_t *escaped;     /* indices of the escaped particles of a correction */
+  size_t escaped_cap;
   float *x, *y, *x0, *y0, *radius;
   int8_t *sign;
   uint8_t *state;
@@ -62,6 +66,14 @@ static int pls_threads(const lsm_particles *p, size_t n) {
 #define PCL_INLINE static inline
 #endif
 
+/* Loops that vectorise: GCC function multi-versioning picks the AVX2 clone at
+ * load time (same arithmetic, no FMA contraction in C17). */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define PCL_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define PCL_CLONES
+#endif
+
 /* phi at (x, y) and the unit normal there (interpolated central differences). */
 PCL_INLINE float eval_phi_normal(const lsm_particles *p, const lsm_grid *g, float x, float y,
                              float *n_x, float *n_y) {
@@ -93,6 +105,29 @@ PCL_INLINE float eval_phi(const lsm_particles *p, const lsm_grid *g, float x, fl
  * differences (one-sided at the grid edge, as in lsm_pcl_phi_normal).  One
  * vectorisable pass over the grid; each particle then needs three bilinear
  * interpolations from one 4-node neighbourhood instead of a 4x4 stencil. */
+static void velocity_node(float *v, const float *c, const float *t, const float *dn,
+                          const float *up, int i, int l, int r, float wx, float wy) {
+  v[4 * i + 0] = c[i] - t[i];
+  v[4 * i + 1] = (c[r] - c[l]) * wx;
+  v[4 * i + 2] = (up[i] - dn[i]) * wy;
+  v[4 * i + 3] = 0.0f;
+}
+
+/* One row of the node field: the interior nodes in a branch-free loop. */
+PCL_CLONES
+static void velocity_row(float *restrict v, const float *restrict c, const float *restrict t,
+                         const float *restrict dn, const float *restrict up, int nx,
+                         float inv_2dx, float inv_dx, float wy) {
+  for (int i = 1; i < nx - 1; ++i) {
+    v[4 * i + 0] = c[i] - t[i];
+    v[4 * i + 1] = (c[i + 1] - c[i - 1]) * inv_2dx;
+    v[4 * i + 2] = (up[i] - dn[i]) * wy;
+    v[4 * i + 3] = 0.0f;
+  }
+  velocity_node(v, c, t, dn, up, 0, 0, nx > 1 ? 1 : 0, inv_dx, wy);
+  if (nx > 1) velocity_node(v, c, t, dn, up, nx - 1, nx - 2, nx - 1, inv_dx, wy);
+}
+
 static void build_velocity(lsm_particles *p, const lsm_grid *in, const lsm_grid *target, int nt) {
   const int nx = p->nx, ny = p->ny;
 #pragma omp parallel for num_threads(nt) schedule(static)
@@ -100,15 +135,7 @@ static void build_velocity(lsm_particles *p, const lsm_grid *in, const lsm_grid 
     const float *c = &LSM_AT(in, 0, j), *t = &LSM_AT(target, 0, j);
     const float *dn = &LSM_AT(in, 0, j > 0 ? j - 1 : 0), *up = &LSM_AT(in, 0, j + 1 < ny ? j + 1 : ny - 1);
     const float wy = (j > 0 && j + 1 < ny) ? p->inv_2dy : p->inv_dy;
-    float *v = p->velocity + (size_t)j * nx * 4;
-    for (int i = 0; i < nx; ++i) {
-      const int l = i > 0 ? i - 1 : 0, r = i + 1 < nx ? i + 1 : nx - 1;
-      const float wx = (i > 0 && i + 1 < nx) ? p->inv_2dx : p->inv_dx;
-      v[4 * i + 0] = c[i] - t[i];
-      v[4 * i + 1] = (c[r] - c[l]) * wx;
-      v[4 * i + 2] = (up[i] - dn[i]) * wy;
-      v[4 * i + 3] = 0.0f;
-    }
+    velocity_row(p->velocity + (size_t)j * nx * 4, c, t, dn, up, nx, p->inv_2dx, p->inv_dx, wy);
   }
 }
 
@@ -263,6 +290,7 @@ void lsm_pls_destroy(lsm_particles **pp) {
   free(p->minus);
   free(p->velocity);
   free(p->mark);
+  free(p->escaped);
   free(p);
   *pp = NULL;
 }
@@ -300,9 +328,12 @@ lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_parti
   p->rmax = 0.5f * hmin;
   p->band = 3.0f * hmax;
   size_t cells;
-  if (!lsm_size_mul((size_t)p->nx, (size_t)p->ny, &cells)) {
+  /* The particle loops index the node field (4 floats per node) and phi's
+   * rows with int offsets (so they vectorise with 32-bit gathers). */
+  if (!lsm_size_mul((size_t)p->nx, (size_t)p->ny, &cells) || cells > (size_t)INT_MAX / 4 ||
+      (size_t)phi0->stride * (size_t)(phi0->ny + 1) > (size_t)INT_MAX) {
     lsm_pls_destroy(&p);
-    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "particles: grid %dx%d overflows", phi0->nx, phi0->ny);
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "particles: grid %dx%d is too large for the particle level set (at most 2^29 nodes)", phi0->nx, phi0->ny);
   }
   p->plus = lsm_alloc(cells, sizeof(float), err, "particle correction");
   p->minus = p->plus ? lsm_alloc(cells, sizeof(float), err, "particle correction") : NULL;
@@ -321,38 +352,82 @@ lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_parti
   return LSM_OK;
 }
 
-void lsm_pls_begin_step(lsm_particles *p) {
-  if (p->n == 0) return;
-  memcpy(p->x0, p->x, p->n * sizeof(float));
-  memcpy(p->y0, p->y, p->n * sizeof(float));
+void lsm_pls_begin_step(lsm_particles *p, int stages) {
+  /* The copy x0 = x is made by the first stage's loop itself (it reads x
+   * anyway), and only when a later stage will read x0. */
+  p->keep_start = stages > 1;
 }
 
-/* The particle loop of a stage, written branch-free over plain arrays so the
- * compiler vectorises it (gathers on AVX2; GCC function multi-versioning picks
- * the AVX2 clone at load time, same arithmetic, no FMA contraction in C17). */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-static int advect(ptrdiff_t n, float *restrict px, float *restrict py,
-                        const float *restrict x0, const float *restrict y0,
+/* The particle loops of a stage, written branch-free over plain arrays so the
+ * compiler vectorises them (gathers on AVX2; GCC function multi-versioning
+ * picks the AVX2 clone at load time, same arithmetic, no FMA contraction in
+ * C17).  The displacement dt F N (in cells) at a particle comes from the node
+ * field v (F, gx, gy per node), bilinearly interpolated. */
+
+PCL_INLINE void displacement(const float *restrict v, int nx, int ny, float inv_dx,
+                             float inv_dy, float dt, float x, float y, float *ux, float *uy) {
+  float fx, fy;
+  const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
+  const int a = (j * nx + i) * 4, b = a + nx * 4;
+  const float F = lsm_pcl_bilinear(v[a], v[a + 4], v[b], v[b + 4], fx, fy);
+  const float gx = lsm_pcl_bilinear(v[a + 1], v[a + 5], v[b + 1], v[b + 5], fx, fy);
+  const float gy = lsm_pcl_bilinear(v[a + 2], v[a + 6], v[b + 2], v[b + 6], fx, fy);
+  const float g = sqrtf(gx * gx + gy * gy);
+  const float inv = 1.0f / (g > 0.0f ? g : 1.0f);
+  const float n_x = g > 0.0f ? gx * inv : LSM_PCL_INV_SQRT2;
+  const float n_y = g > 0.0f ? gy * inv : LSM_PCL_INV_SQRT2;
+  *ux = dt * F * n_x * inv_dx;
+  *uy = dt * F * n_y * inv_dy;
+}
+
+/* A first stage (c0 = 0, c1 = 1): x += dt F N; with keep_start, the start
+ * positions are saved in x0, y0 on the way (for the later stages). */
+PCL_CLONES
+static int advect_first(ptrdiff_t n, float *restrict px, float *restrict py,
+                        float *restrict x0, float *restrict y0, int keep_start,
                         const float *restrict v, int nx, int ny, float inv_dx, float inv_dy,
-                        float c0, float c1, float dt, int nt) {
+                        float dt, int nt) {
+  int outside = 0;
+  if (keep_start) {
+#pragma omp parallel for simd num_threads(nt) schedule(static) reduction(| : outside)
+    for (ptrdiff_t k = 0; k < n; ++k) {
+      const float x = px[k], y = py[k];
+      float ux, uy;
+      displacement(v, nx, ny, inv_dx, inv_dy, dt, x, y, &ux, &uy);
+      x0[k] = x;
+      y0[k] = y;
+      px[k] = x + ux;
+      py[k] = y + uy;
+      outside |= !lsm_pcl_in_domain(px[k], py[k], nx, ny);
+    }
+  } else {
+#pragma omp parallel for simd num_threads(nt) schedule(static) reduction(| : outside)
+    for (ptrdiff_t k = 0; k < n; ++k) {
+      const float x = px[k], y = py[k];
+      float ux, uy;
+      displacement(v, nx, ny, inv_dx, inv_dy, dt, x, y, &ux, &uy);
+      px[k] = x + ux;
+      py[k] = y + uy;
+      outside |= !lsm_pcl_in_domain(px[k], py[k], nx, ny);
+    }
+  }
+  return outside;
+}
+
+/* A later stage: x = c0 x0 + c1 (x + dt F N). */
+PCL_CLONES
+static int advect(ptrdiff_t n, float *restrict px, float *restrict py,
+                  const float *restrict x0, const float *restrict y0,
+                  const float *restrict v, int nx, int ny, float inv_dx, float inv_dy,
+                  float c0, float c1, float dt, int nt) {
   int outside = 0;
 #pragma omp parallel for simd num_threads(nt) schedule(static) reduction(| : outside)
   for (ptrdiff_t k = 0; k < n; ++k) {
     const float x = px[k], y = py[k];
-    float fx, fy;
-    const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
-    const int a = (j * nx + i) * 4, b = a + nx * 4;
-    const float F = lsm_pcl_bilinear(v[a], v[a + 4], v[b], v[b + 4], fx, fy);
-    const float gx = lsm_pcl_bilinear(v[a + 1], v[a + 5], v[b + 1], v[b + 5], fx, fy);
-    const float gy = lsm_pcl_bilinear(v[a + 2], v[a + 6], v[b + 2], v[b + 6], fx, fy);
-    const float g = sqrtf(gx * gx + gy * gy);
-    const float inv = 1.0f / (g > 0.0f ? g : 1.0f);
-    const float n_x = g > 0.0f ? gx * inv : LSM_PCL_INV_SQRT2;
-    const float n_y = g > 0.0f ? gy * inv : LSM_PCL_INV_SQRT2;
-    const float xn = c0 * x0[k] + c1 * (x + dt * F * n_x * inv_dx);
-    const float yn = c0 * y0[k] + c1 * (y + dt * F * n_y * inv_dy);
+    float ux, uy;
+    displacement(v, nx, ny, inv_dx, inv_dy, dt, x, y, &ux, &uy);
+    const float xn = c0 * x0[k] + c1 * (x + ux);
+    const float yn = c0 * y0[k] + c1 * (y + uy);
     px[k] = xn;
     py[k] = yn;
     outside |= !lsm_pcl_in_domain(xn, yn, nx, ny);
@@ -366,8 +441,13 @@ void lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_tar
   const float hx = (float)(p->nx - 1), hy = (float)(p->ny - 1);
   if (n == 0) return;
   build_velocity(p, in, phi_target, (long)p->nx * p->ny < 65536L ? 1 : pls_threads(p, LSM_PLS_MIN_PARALLEL));
-  const int outside = advect(n, p->x, p->y, p->x0, p->y0, p->velocity, p->nx, p->ny,
-                                   p->inv_dx, p->inv_dy, c0, c1, dt, pls_threads(p, p->n));
+  const int nt = pls_threads(p, p->n);
+  const int outside =
+      c0 == 0.0f && c1 == 1.0f
+          ? advect_first(n, p->x, p->y, p->x0, p->y0, p->keep_start, p->velocity, p->nx, p->ny,
+                         p->inv_dx, p->inv_dy, dt, nt)
+          : advect(n, p->x, p->y, p->x0, p->y0, p->velocity, p->nx, p->ny, p->inv_dx, p->inv_dy,
+                   c0, c1, dt, nt);
   /* Particles that left the domain: flagged (removed at the next correction)
    * and clamped so later stages interpolate inside the grid; a NaN position
    * (never expected) is out of the domain too and parked at 0. */
@@ -388,23 +468,22 @@ void lsm_pls_stage_hook(void *ctx, const lsm_grid *in, const lsm_grid *phi_targe
 }
 
 /* Escaped-particle detection (sign(phi(p)) != s_p and |phi(p)| > r_p),
- * branch-free so it vectorises; returns how many escaped. */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-static long long detect(ptrdiff_t n, const float *restrict px, const float *restrict py,
-                        const int8_t *restrict sign, const float *restrict radius,
-                        uint8_t *restrict state, const lsm_grid *phi, float far,
-                        long long *strays, int nt) {
+ * branch-free so it vectorises; counts the escaped ones and the strays (int
+ * counters keep the vector lanes 32-bit: at most 2^30 particles per call). */
+PCL_CLONES
+static void detect(int n, const float *restrict px, const float *restrict py,
+                   const int8_t *restrict sign, const float *restrict radius,
+                   uint8_t *restrict state, const lsm_grid *phi, float far, int *escaped,
+                   int *strays, int nt) {
   const int nx = phi->nx, ny = phi->ny;
-  const ptrdiff_t stride = phi->stride;
+  const int stride = (int)phi->stride; /* int offsets: 8-lane gathers (checked at creation) */
   const float *restrict g = phi->data;
-  long long count = 0, stray = 0;
+  int count = 0, stray = 0;
 #pragma omp parallel for simd num_threads(nt) schedule(static) reduction(+ : count, stray)
-  for (ptrdiff_t k = 0; k < n; ++k) {
+  for (int k = 0; k < n; ++k) {
     float fx, fy;
     const int i = lsm_pcl_locate(px[k], nx, &fx), j = lsm_pcl_locate(py[k], ny, &fy);
-    const ptrdiff_t a = (ptrdiff_t)j * stride + i, b = a + stride;
+    const int a = j * stride + i, b = a + stride;
     const float ph = lsm_pcl_bilinear(g[a], g[a + 1], g[b], g[b + 1], fx, fy);
     const int e = lsm_pcl_escaped(sign[k], ph, radius[k]);
     /* Escaped by more than `far`: the front has left this particle behind
@@ -415,8 +494,8 @@ static long long detect(ptrdiff_t n, const float *restrict px, const float *rest
     count += e && !lost;
     stray += lost;
   }
+  *escaped = count;
   *strays = stray;
-  return count;
 }
 
 lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
@@ -431,20 +510,43 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
   const int nt = pls_threads(p, p->n);
 
   /* 1. detection (parallel, vectorised; each particle writes its own flag) */
-  long long strays = 0;
+  long long strays = 0, found = 0;
   const float far = 1.5f * (p->dx > p->dy ? p->dx : p->dy);
-  const long long found = detect(n, p->x, p->y, p->sign, p->radius, p->state, phi, far, &strays, nt);
+  const ptrdiff_t chunk = (ptrdiff_t)1 << 30;
+  for (ptrdiff_t k0 = 0; k0 < n; k0 += chunk) {
+    const int m = (int)(n - k0 < chunk ? n - k0 : chunk);
+    int e = 0, s = 0;
+    detect(m, p->x + k0, p->y + k0, p->sign + k0, p->radius + k0, p->state + k0, phi, far, &e, &s,
+           nt);
+    found += e;
+    strays += s;
+  }
   p->left_pending += (size_t)strays;
   p->stats.stray += strays;
+
+  /* The escaped particles, in particle order (few: a scan of the flags). */
+  size_t escaped = 0;
+  if (found > 0) {
+    if ((size_t)found > p->escaped_cap) {
+      size_t *q = realloc(p->escaped, (size_t)found * sizeof *q);
+      if (!q) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot list %lld escaped", found);
+      p->escaped = q;
+      p->escaped_cap = (size_t)found;
+    }
+    for (ptrdiff_t k = 0; k < n && escaped < (size_t)found; ++k)
+      if (p->state[k] & PCL_ESCAPED) {
+        p->state[k] &= (uint8_t)~PCL_ESCAPED;
+        p->escaped[escaped++] = (size_t)k;
+      }
+  }
 
   /* 2. phi_plus / phi_minus at the corners of escaped particles (serial, in
    *    particle order; max/min make the order irrelevant anyway).  phi itself
    *    is not written until every particle has been seen. */
-  long long escaped = 0, corrected = 0;
+  long long corrected = 0;
   const int nx = p->nx;
-  for (ptrdiff_t k = 0; found && k < n; ++k) {
-    if (!(p->state[k] & PCL_ESCAPED)) continue;
-    ++escaped;
+  for (size_t e = 0; e < escaped; ++e) {
+    const size_t k = p->escaped[e];
     const int s = p->sign[k];
     const float r = p->radius[k], x = p->x[k], y = p->y[k];
     float fx, fy;
@@ -467,30 +569,26 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
   }
 
   /* 3. Eq. 3.26 at every touched corner (each once: its mark is cleared). */
-  if (escaped) {
-    for (ptrdiff_t k = 0; k < n; ++k) {
-      if (!(p->state[k] & PCL_ESCAPED)) continue;
-      float fx, fy;
-      const int i = lsm_pcl_locate(p->x[k], p->nx, &fx), j = lsm_pcl_locate(p->y[k], p->ny, &fy);
-      for (int b = 0; b < 2; ++b)
-        for (int a = 0; a < 2; ++a) {
-          const size_t idx = (size_t)(j + b) * (size_t)nx + (size_t)(i + a);
-          if (!p->mark[idx]) continue;
-          p->mark[idx] = 0;
-          const float v = lsm_pcl_select(p->plus[idx], p->minus[idx]);
-          float *cell = &LSM_AT(phi, i + a, j + b);
-          if (v != *cell) {
-            *cell = v;
-            ++corrected;
-          }
+  for (size_t e = 0; e < escaped; ++e) {
+    const size_t k = p->escaped[e];
+    float fx, fy;
+    const int i = lsm_pcl_locate(p->x[k], p->nx, &fx), j = lsm_pcl_locate(p->y[k], p->ny, &fy);
+    for (int b = 0; b < 2; ++b)
+      for (int a = 0; a < 2; ++a) {
+        const size_t idx = (size_t)(j + b) * (size_t)nx + (size_t)(i + a);
+        if (!p->mark[idx]) continue;
+        p->mark[idx] = 0;
+        const float v = lsm_pcl_select(p->plus[idx], p->minus[idx]);
+        float *cell = &LSM_AT(phi, i + a, j + b);
+        if (v != *cell) {
+          *cell = v;
+          ++corrected;
         }
-    }
+      }
   }
-  if (escaped)
-    for (ptrdiff_t k = 0; k < n; ++k) p->state[k] &= (uint8_t)~PCL_ESCAPED;
-  p->stats.escaped_last = escaped;
+  p->stats.escaped_last = (long long)escaped;
   p->stats.corrected_last = corrected;
-  p->stats.escaped_total += escaped;
+  p->stats.escaped_total += (long long)escaped;
   p->stats.corrected_total += corrected;
 
   /* 4. radius adjustment on the corrected phi (option) */

@@ -28,7 +28,7 @@
  * particles are removed by in-order compaction.
  *
  * Typical step (see lsm_pls_stage for Runge–Kutta):
- *     lsm_pls_begin_step(p);
+ *     lsm_pls_begin_step(p, stages);
  *     lsm_pls_stage(p, phi_n, target, 0, 1, dt);     (same stages as the grid)
  *     ... grid step phi_n -> phi_{n+1} ...
  *     lsm_pls_correct(p, phi_{n+1}, err);
@@ -108,9 +108,11 @@ lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_parti
 /* Frees the set and sets *p to NULL (NULL and *p == NULL are fine). */
 void lsm_pls_destroy(lsm_particles **p);
 
-/* Saves the current positions as the Runge–Kutta base x_u0.  Call once per
- * level-set step, before its first lsm_pls_stage. */
-void lsm_pls_begin_step(lsm_particles *p);
+/* Starts a level-set step of `stages` Runge–Kutta stages (Euler 1, RK2 2,
+ * RK3 3).  Call once per step, before its first lsm_pls_stage.  With more
+ * than one stage, the first stage saves the start positions as the base
+ * x_u0 of the later ones; Euler needs no copy. */
+void lsm_pls_begin_step(lsm_particles *p, int stages);
 
 /* One Runge–Kutta stage, the particle twin of lsm_scheme_stage:
  *   x_out = c0 * x_u0 + c1 * (x_in + dt * F(x_in) N(x_in))

@@ -292,7 +292,7 @@ static void test_uniform_field(void **state) {
     for (int scheme = 0; scheme < 3; ++scheme) {
       set_particles(p, 4, x, y, s, r);
       for (int step = 0; step < 2; ++step) {
-        lsm_pls_begin_step(p);
+        lsm_pls_begin_step(p, scheme + 1);
         for (int st = 0; st <= scheme; ++st)
           lsm_pls_stage(p, phi, target, coef[scheme][st][0], coef[scheme][st][1], dt);
       }
@@ -307,7 +307,7 @@ static void test_uniform_field(void **state) {
     }
     /* a single Euler stage, checked on its own */
     set_particles(p, 4, x, y, s, r);
-    lsm_pls_begin_step(p);
+    lsm_pls_begin_step(p, 1);
     lsm_pls_stage(p, phi, target, 0.0f, 1.0f, dt);
     lsm_pls_view v = lsm_pls_view_get(p);
     for (int k = 0; k < 4; ++k) {
@@ -344,7 +344,7 @@ static void test_velocity_sign(void **state) {
       y[k] = (float)(cy + 10.0 * sin(ang[k]));
     }
     set_particles(p, 3, x, y, s, r);
-    lsm_pls_begin_step(p);
+    lsm_pls_begin_step(p, 1);
     lsm_pls_stage(p, phi, target, 0.0f, 1.0f, dt);
     lsm_pls_view v = lsm_pls_view_get(p);
     for (int k = 0; k < 3; ++k) {
@@ -379,7 +379,7 @@ static void test_left_domain(void **state) {
   float x[3] = {18.5f, 5.0f, 12.0f}, y[3] = {3.0f, 4.0f, 5.0f}, r[3] = {0.5f, 0.5f, 0.5f};
   int8_t s[3] = {1, -1, 1};
   set_particles(p, 3, x, y, s, r);
-  lsm_pls_begin_step(p);
+  lsm_pls_begin_step(p, 1);
   lsm_pls_stage(p, phi, target, 0.0f, 1.0f, 0.5f); /* moves by 1 cell: 18.5 -> 19.5 > 19 */
   correct(p, phi);
   lsm_pls_view v = lsm_pls_view_get(p);
@@ -558,7 +558,7 @@ static run_result run_sequence(int threads, int rk3, int reseed, int adjust, int
   lsm_particles *p = new_pls(phi, &o);
   const float dt = 0.3f;
   for (int n = 0; n < steps; ++n) {
-    lsm_pls_begin_step(p);
+    lsm_pls_begin_step(p, rk3 ? 3 : 1);
     if (rk3) {
       /* the particle stages of RK3 against stand-in stage fields */
       lsm_pls_stage(p, phi, target, 0.0f, 1.0f, dt);
@@ -666,7 +666,7 @@ static void test_reseed_and_adjust(void **state) {
   o.reseed_every = 1;
   lsm_particles *p = new_pls(phi, &o);
   const long long band = lsm_pls_stats_get(p)->band_cells;
-  lsm_pls_begin_step(p);
+  lsm_pls_begin_step(p, 1);
   lsm_pls_stage(p, phi, phi, 0.0f, 1.0f, 0.1f); /* F = 0: nothing moves */
   correct(p, phi);
   const lsm_pls_stats *st = lsm_pls_stats_get(p);
@@ -716,7 +716,7 @@ static void test_options_and_edges(void **state) {
   lsm_err_clear(&err);
   assert_int_equal(lsm_pls_create(phi, NULL, &p, &err), LSM_OK);
   assert_int_equal(lsm_pls_count(p), 0);
-  lsm_pls_begin_step(p);
+  lsm_pls_begin_step(p, 1);
   lsm_pls_stage(p, phi, phi, 0.0f, 1.0f, 1.0f);
   assert_int_equal(lsm_pls_correct(p, phi, &err), LSM_OK);
   lsm_pls_destroy(&p);
