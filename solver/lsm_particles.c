@@ -36,7 +36,8 @@ struct lsm_particles {
   /* correction scratch, nx*ny each: phi_plus, phi_minus, touched marks */
   float *plus, *minus;
   /* advection scratch, 4 floats per node: F = phi - phi_target and the
-   * central-difference gradient (gx, gy) of phi, rebuilt at every stage */
+   * central-difference gradient (gx, gy) of phi, rebuilt at every stage (the
+   * 4th float is padding, never written or read) */
   float *velocity;
   uint8_t *mark;
   uint64_t gen; /* seeding generation (0 at creation) */
@@ -110,7 +111,6 @@ static void velocity_node(float *v, const float *c, const float *t, const float 
   v[4 * i + 0] = c[i] - t[i];
   v[4 * i + 1] = (c[r] - c[l]) * wx;
   v[4 * i + 2] = (up[i] - dn[i]) * wy;
-  v[4 * i + 3] = 0.0f;
 }
 
 /* One row of the node field: the interior nodes in a branch-free loop. */
@@ -122,7 +122,6 @@ static void velocity_row(float *restrict v, const float *restrict c, const float
     v[4 * i + 0] = c[i] - t[i];
     v[4 * i + 1] = (c[i + 1] - c[i - 1]) * inv_2dx;
     v[4 * i + 2] = (up[i] - dn[i]) * wy;
-    v[4 * i + 3] = 0.0f;
   }
   velocity_node(v, c, t, dn, up, 0, 0, nx > 1 ? 1 : 0, inv_dx, wy);
   if (nx > 1) velocity_node(v, c, t, dn, up, nx - 1, nx - 2, nx - 1, inv_dx, wy);
