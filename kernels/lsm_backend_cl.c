@@ -791,10 +791,9 @@ static lsm_status cl_create(void *vctx, const lsm_grid *src, const lsm_grid *tgt
   s->far = lsm_pcl_far(s->dx, s->dy);
   s->rmin = lsm_pcl_rmin(s->dx, s->dy);
   s->rmax = lsm_pcl_rmax(s->dx, s->dy);
-  /* particle kernels: 1D groups of 128 (lsm_pcl_detect needs at least 4 for
-   * its counters), fewer if the device says so */
+  /* particle kernels: 1D groups of 128, fewer if the device says so */
   s->plocal = 128;
-  while (s->plocal > 8 && (s->plocal > c->max_group || s->plocal > c->max_items[0]))
+  while (s->plocal > 1 && (s->plocal > c->max_group || s->plocal > c->max_items[0]))
     s->plocal /= 2;
   /* Cell kernels: row segments of LX work-items, LX a power of two from 8 up
    * to local_max, no wider than the row needs.  (Taller groups run several
@@ -1043,6 +1042,7 @@ static lsm_status cl_pls_correct(void *vs, lsm_pls_counts *counts, lsm_err *err)
   ARG(k, 13, s->plus);
   ARG(k, 14, s->minus);
   ARG(k, 15, s->counters);
+  LSM_TRY(set_arg(s, k, 16, s->plocal * sizeof(cl_int), NULL, err));
   LSM_TRY(run_1d(s, k, (size_t)s->pn, err));
   k = s->k[K_PCL_APPLY];
   ARG(k, 0, s->phi);

@@ -263,13 +263,19 @@ __kernel void lsm_residual_partial(__global const float *phi, __global const flo
  * every kernel bounds-checks. */
 enum { LSM_PCL_LIVE = 0, LSM_PCL_LEFT = 1, LSM_PCL_DEAD = 2 };
 
+/* Particle kernels take the same fast path as the cell kernels: work-groups
+ * wholly below n run without a per-item check (PoCL then vectorises across
+ * work-items), the last one checks k < n. */
+inline int lsm_cl_group_below(int n) {
+  return (int)((get_group_id(0) + 1) * get_local_size(0)) <= n;
+}
+
 /* The stage's node field, float4 (F, gx, gy, 0) per node, nx*ny row-major
  * (lsm_pcl_node_field: one-sided at the grid edge, no ghost read). */
-__kernel void lsm_pcl_velocity(__global float4 *vel, __global const float *in,
-                               __global const float *target, int nx, int ny, int stride,
-                               float inv_dx, float inv_dy, float inv_2dx, float inv_2dy) {
-  const int i = (int)get_global_id(0), j = (int)get_global_id(1);
-  if (i >= nx || j >= ny) return;
+inline void lsm_cl_node_field(__global float4 *vel, __global const float *in,
+                              __global const float *target, int i, int j, int nx, int ny,
+                              int stride, float inv_dx, float inv_dy, float inv_2dx,
+                              float inv_2dy) {
   const int k = lsm_cl_at(i, j, stride);
   const int l = i > 0 ? k - 1 : k, r = i + 1 < nx ? k + 1 : k;
   const int d = j > 0 ? k - stride : k, u = j + 1 < ny ? k + stride : k;
@@ -279,29 +285,34 @@ __kernel void lsm_pcl_velocity(__global float4 *vel, __global const float *in,
   vel[j * nx + i] = (float4)(F, gx, gy, 0.0f);
 }
 
+__kernel void lsm_pcl_velocity(__global float4 *vel, __global const float *in,
+                               __global const float *target, int nx, int ny, int stride,
+                               float inv_dx, float inv_dy, float inv_2dx, float inv_2dy) {
+  const int i = (int)get_global_id(0), j = (int)get_global_id(1);
+  if (lsm_cl_group_inside(nx, ny))
+    lsm_cl_node_field(vel, in, target, i, j, nx, ny, stride, inv_dx, inv_dy, inv_2dx, inv_2dy);
+  else if (i < nx && j < ny)
+    lsm_cl_node_field(vel, in, target, i, j, nx, ny, stride, inv_dx, inv_dy, inv_2dx, inv_2dy);
+}
+
 /* x_out = c0 x_u0 + c1 (x + dt F N / h) per particle, F and grad phi
  * interpolated bilinearly from the node field (solver/lsm_particles.c:
  * advect).  save_base: the step's first stage, which first records the
  * positions as the step's base x_u0 (lsm_pls_begin_step).  A particle that
  * leaves the domain is flagged (removed by the next lsm_pcl_detect) and
- * clamped, as lsm_pls_stage does. */
-__kernel void lsm_pcl_advect(__global float *px, __global float *py, __global float *x0,
-                             __global float *y0, __global uchar *state, int n,
-                             __global const float4 *vel, int nx, int ny, float inv_dx,
-                             float inv_dy, float c0, float c1, float dt, int save_base) {
-  const int k = (int)get_global_id(0);
-  if (k >= n) return;
+ * clamped, as lsm_pls_stage does.  Branch-free (selects) so that it
+ * vectorises; removed particles are computed and left as they were. */
+inline void lsm_cl_advect(__global float *px, __global float *py, __global float *x0,
+                          __global float *y0, __global uchar *state, int k,
+                          __global const float4 *vel, int nx, int ny, float inv_dx,
+                          float inv_dy, float c0, float c1, float dt, int save_base) {
   const uchar st = state[k];
-  if (st == LSM_PCL_DEAD) return;
   const float x = px[k], y = py[k];
-  float bx, by;
   if (save_base) {
-    x0[k] = bx = x;
-    y0[k] = by = y;
-  } else {
-    bx = x0[k];
-    by = y0[k];
+    x0[k] = x;
+    y0[k] = y;
   }
+  const float bx = save_base ? x : x0[k], by = save_base ? y : y0[k];
   float fx, fy;
   const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
   const int a = j * nx + i, b = a + nx;
@@ -311,15 +322,24 @@ __kernel void lsm_pcl_advect(__global float *px, __global float *py, __global fl
   const float gy = lsm_pcl_bilinear(v00.z, v10.z, v01.z, v11.z, fx, fy);
   float n_x, n_y;
   lsm_pcl_normal(gx, gy, &n_x, &n_y);
-  float xn = lsm_pcl_stage_coord(c0, bx, c1, x, dt, F, n_x, inv_dx);
-  float yn = lsm_pcl_stage_coord(c0, by, c1, y, dt, F, n_y, inv_dy);
-  if (!lsm_pcl_in_domain(xn, yn, nx, ny)) {
-    state[k] = LSM_PCL_LEFT;
-    xn = lsm_pcl_clamp_coord(xn, (float)(nx - 1));
-    yn = lsm_pcl_clamp_coord(yn, (float)(ny - 1));
-  }
-  px[k] = xn;
-  py[k] = yn;
+  const float xn = lsm_pcl_stage_coord(c0, bx, c1, x, dt, F, n_x, inv_dx);
+  const float yn = lsm_pcl_stage_coord(c0, by, c1, y, dt, F, n_y, inv_dy);
+  const int out = !lsm_pcl_in_domain(xn, yn, nx, ny);
+  const int dead = st == LSM_PCL_DEAD;
+  px[k] = dead ? x : (out ? lsm_pcl_clamp_coord(xn, (float)(nx - 1)) : xn);
+  py[k] = dead ? y : (out ? lsm_pcl_clamp_coord(yn, (float)(ny - 1)) : yn);
+  state[k] = (st == LSM_PCL_LIVE && out) ? (uchar)LSM_PCL_LEFT : st;
+}
+
+__kernel void lsm_pcl_advect(__global float *px, __global float *py, __global float *x0,
+                             __global float *y0, __global uchar *state, int n,
+                             __global const float4 *vel, int nx, int ny, float inv_dx,
+                             float inv_dy, float c0, float c1, float dt, int save_base) {
+  const int k = (int)get_global_id(0);
+  if (lsm_cl_group_below(n))
+    lsm_cl_advect(px, py, x0, y0, state, k, vel, nx, ny, inv_dx, inv_dy, c0, c1, dt, save_base);
+  else if (k < n)
+    lsm_cl_advect(px, py, x0, y0, state, k, vel, nx, ny, inv_dx, inv_dy, c0, c1, dt, save_base);
 }
 
 /* Order-preserving keys of floats for atomic max / min on unsigned ints:
@@ -348,26 +368,25 @@ enum { LSM_PCL_N_ESCAPED, LSM_PCL_N_STRAY, LSM_PCL_N_REMOVED, LSM_PCL_N_LIVE,
  * farther than `far`, flagged for removal); an escaped one merges its local
  * level set at the 4 corners of its cell into phi_plus (s = +1, max) or
  * phi_minus (s = -1, min) with atomics on order-preserving keys, so the
- * result does not depend on the particle order.  phi is only read.  Counts
- * are gathered per work-group in local memory (one global atomic per group
- * and counter). */
+ * result does not depend on the particle order.  phi is only read.  The rare
+ * events (removed, stray, escaped) are counted with global atomics; the live
+ * particles per work-group in `scratch` (one int per work-item), summed by
+ * work-item 0. */
 __kernel void lsm_pcl_detect(__global const float *px, __global const float *py,
                              __global const char *sign, __global const float *radius,
                              __global uchar *state, int n, __global const float *phi, int nx,
                              int ny, int stride, float dx, float dy, float far,
                              __global uint *plus, __global uint *minus,
-                             __global int *counters) {
-  __local int count[LSM_PCL_N_CORRECTED];
-  const int lid = (int)get_local_id(0);
-  if (lid < LSM_PCL_N_CORRECTED) count[lid] = 0;
-  barrier(CLK_LOCAL_MEM_FENCE);
-  const int k = (int)get_global_id(0);
+                             __global int *counters, __local int *scratch) {
+  const int lid = (int)get_local_id(0), k = (int)get_global_id(0);
+  int live = 0;
   if (k < n) {
     const uchar st = state[k];
     if (st == LSM_PCL_LEFT) {
       state[k] = LSM_PCL_DEAD;
-      atomic_inc(&count[LSM_PCL_N_REMOVED]);
+      atomic_inc(&counters[LSM_PCL_N_REMOVED]);
     } else if (st == LSM_PCL_LIVE) {
+      live = 1;
       const float x = px[k], y = py[k];
       float fx, fy;
       const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
@@ -376,12 +395,11 @@ __kernel void lsm_pcl_detect(__global const float *px, __global const float *py,
       const int s = sign[k];
       const float r = radius[k];
       const int e = lsm_pcl_escaped(s, ph, r);
-      atomic_inc(&count[LSM_PCL_N_LIVE]);
       if (lsm_pcl_stray(e, ph, far)) {
         state[k] = LSM_PCL_LEFT;
-        atomic_inc(&count[LSM_PCL_N_STRAY]);
+        atomic_inc(&counters[LSM_PCL_N_STRAY]);
       } else if (e) {
-        atomic_inc(&count[LSM_PCL_N_ESCAPED]);
+        atomic_inc(&counters[LSM_PCL_N_ESCAPED]);
         for (int q = 0; q < 4; ++q) {
           const int ca = q & 1, cb = q >> 1;
           const float pv = phi[(cb ? b : a) + ca];
@@ -396,8 +414,14 @@ __kernel void lsm_pcl_detect(__global const float *px, __global const float *py,
       }
     }
   }
+  scratch[lid] = live;
   barrier(CLK_LOCAL_MEM_FENCE);
-  if (lid < LSM_PCL_N_CORRECTED && count[lid] != 0) atomic_add(&counters[lid], count[lid]);
+  if (lid == 0) {
+    int sum = 0;
+    const int m = (int)get_local_size(0);
+    for (int q = 0; q < m; ++q) sum += scratch[q];
+    if (sum) atomic_add(&counters[LSM_PCL_N_LIVE], sum);
+  }
 }
 
 /* lsm_pls_correct step 3 at every node an escaped particle touched:
