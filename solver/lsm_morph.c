@@ -103,7 +103,9 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
 static lsm_status device_reseed(lsm_morph *m, lsm_err *err) {
   LSM_TRY(m->ops->download(m->state, m->phi_host, err));
   const lsm_pls_stats before = *lsm_pls_stats_get(m->pls);
-  LSM_TRY(lsm_pls_set(m->pls, 0, NULL, NULL, NULL, NULL, err));
+  const float none_f[1] = {0.0f}; /* no particles (valid pointers all the same) */
+  const int8_t none_s[1] = {1};
+  LSM_TRY(lsm_pls_set(m->pls, 0, none_f, none_f, none_s, none_f, err));
   for (int q = 0; q < m->opts.pls.reseed_every; ++q)
     LSM_TRY(lsm_pls_correct(m->pls, m->phi_host, err));
   const lsm_pls_stats *after = lsm_pls_stats_get(m->pls);
