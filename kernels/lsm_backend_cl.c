@@ -15,8 +15,15 @@
  * lsm_reinit_run, with ghost fills before each stage; floats throughout, and
  * the program is built without contraction or relaxed maths (and with
  * correctly rounded divide and sqrt when the device offers it), so results
- * track the C path.  Particles (stage hooks) and the blend of the two morphs
- * of a gap run on the host / C path.
+ * track the C path.  The blend of the two morphs of a gap runs on the host.
+ *
+ * Particles (--method pls, the optional ops pls_load / pls_correct): the set
+ * seeded on the host is copied to the device once per pair (and after each
+ * host reseeding); each stage then builds the node field F, grad phi and
+ * advects every particle, each correction removes flagged particles, detects
+ * escaped ones and corrects phi, all on the device with the per-particle code
+ * of kernels/lsm_particle_cell.h.  The host reads back five counters per
+ * correction.  Removed particles are kept with a dead state, not compacted.
  *
  * Program binaries are cached in $XDG_CACHE_HOME/lsmorph (else
  * $HOME/.cache/lsmorph), one file per 64-bit FNV-1a key over the source, the
@@ -37,7 +44,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "lsm_kernels.h" /* lsm_kernel_source[]: morph.cl + lsm_cell.h, NUL-terminated */
+#include "kernels/lsm_particle_cell.h"
+#include "lsm_kernels.h" /* lsm_kernel_source[]: morph.cl + the headers, NUL-terminated */
 #include "solver/lsm_backend.h"
 
 /* ---- errors ------------------------------------------------------------------------ */
@@ -625,10 +633,27 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
 
 /* ---- per-pair state ------------------------------------------------------------------------- */
 
-enum { K_GHOSTS, K_UPWIND, K_ROEFIX, K_CFL, K_RESIDUAL, K_REINIT, K_COUNT };
+enum {
+  K_GHOSTS,
+  K_UPWIND,
+  K_ROEFIX,
+  K_CFL,
+  K_RESIDUAL,
+  K_REINIT,
+  K_PCL_VELOCITY,
+  K_PCL_ADVECT,
+  K_PCL_DETECT,
+  K_PCL_APPLY,
+  K_PCL_RADIUS,
+  K_COUNT
+};
 static const char *const kernel_names[K_COUNT] = {
-    "lsm_fill_ghosts", "lsm_stage_upwind",     "lsm_stage_roefix",
-    "lsm_cfl_partial", "lsm_residual_partial", "lsm_reinit_step"};
+    "lsm_fill_ghosts",  "lsm_stage_upwind", "lsm_stage_roefix", "lsm_cfl_partial",
+    "lsm_residual_partial", "lsm_reinit_step", "lsm_pcl_velocity", "lsm_pcl_advect",
+    "lsm_pcl_detect",   "lsm_pcl_apply",    "lsm_pcl_adjust_radius"};
+
+/* The counters of lsm_pcl_detect / lsm_pcl_apply (morph.cl), in this order. */
+enum { PCL_N_ESCAPED, PCL_N_STRAY, PCL_N_REMOVED, PCL_N_LIVE, PCL_N_CORRECTED, PCL_N_COUNT };
 
 typedef struct cl_state {
   cl_ctx *c;
@@ -638,6 +663,17 @@ typedef struct cl_state {
   cl_mem partial;                   /* one float per reduction work-group */
   float *partial_host;
   size_t npartial;
+  /* particles (pls_load): per particle x, y, RK base x0, y0, radius, sign
+   * (char), state (uchar); pcap allocated, pn in use.  Per node (on the first
+   * load): the stage's node field (float4), the phi_plus / phi_minus keys;
+   * and the correction's counters. */
+  cl_mem px, py, px0, py0, pradius, psign, pstate;
+  cl_mem vel, plus, minus, counters;
+  size_t pcap;
+  cl_int pn;
+  int radius_adjust;
+  size_t plocal;  /* particle kernels' work-group size */
+  float inv_2dx, inv_2dy, far, rmin, rmax;
   int nx, ny;
   cl_int stride;
   float dx, dy;
@@ -654,7 +690,10 @@ static void cl_destroy(void **vs) {
   if (s->queue) clFinish(s->queue);
   for (int k = 0; k < K_COUNT; ++k)
     if (s->k[k]) clReleaseKernel(s->k[k]);
-  cl_mem *mems[] = {&s->phi, &s->target, &s->s1, &s->s2, &s->phi0, &s->partial};
+  cl_mem *mems[] = {&s->phi,   &s->target, &s->s1,      &s->s2,    &s->phi0,
+                    &s->partial, &s->px,   &s->py,      &s->px0,   &s->py0,
+                    &s->pradius, &s->psign, &s->pstate, &s->vel,   &s->plus,
+                    &s->minus,   &s->counters};
   for (size_t k = 0; k < sizeof mems / sizeof *mems; ++k)
     if (*mems[k]) clReleaseMemObject(*mems[k]);
   if (s->queue) clReleaseCommandQueue(s->queue);
@@ -746,6 +785,16 @@ static lsm_status cl_create(void *vctx, const lsm_grid *src, const lsm_grid *tgt
   s->dx = src->dx;
   s->dy = src->dy;
   s->bytes = bytes;
+  /* particle constants, computed as lsm_pls_create computes them */
+  s->inv_2dx = 0.5f / s->dx;
+  s->inv_2dy = 0.5f / s->dy;
+  s->far = lsm_pcl_far(s->dx, s->dy);
+  s->rmin = lsm_pcl_rmin(s->dx, s->dy);
+  s->rmax = lsm_pcl_rmax(s->dx, s->dy);
+  /* particle kernels: 1D groups of 128, fewer if the device says so */
+  s->plocal = 128;
+  while (s->plocal > 1 && (s->plocal > c->max_group || s->plocal > c->max_items[0]))
+    s->plocal /= 2;
   /* Cell kernels: row segments of LX work-items, LX a power of two from 8 up
    * to local_max, no wider than the row needs.  (Taller groups run several
    * times slower on PoCL: its work-item loops vectorise along rows.) */
@@ -855,10 +904,191 @@ static lsm_status cl_residual(void *vs, double *norm, lsm_err *err) {
   return LSM_OK;
 }
 
-/* out = c0 u0 + c1 (in - dt Hhat(in)), after filling in's ghosts. */
+/* ---- particles ------------------------------------------------------------------------ */
+
+static lsm_status run_1d(cl_state *s, cl_kernel k, size_t n, lsm_err *err) {
+  const size_t global = round_up(n, s->plocal);
+  CL_TRY(s->c->name, "clEnqueueNDRangeKernel",
+         clEnqueueNDRangeKernel(s->queue, k, 1, NULL, &global, &s->plocal, 0, NULL, NULL));
+  return LSM_OK;
+}
+
+/* The particles' share of a stage whose input is `in` (lsm_pls_stage): the
+ * node field from `in`, then every particle advected; first: the step's
+ * first stage (records the Runge–Kutta base). */
+static lsm_status pcl_stage(cl_state *s, cl_mem in, float c0, float c1, float dt, int first,
+                            lsm_err *err) {
+  const float inv_dx = 1.0f / s->dx, inv_dy = 1.0f / s->dy;
+  cl_kernel k = s->k[K_PCL_VELOCITY];
+  ARG(k, 0, s->vel);
+  ARG(k, 1, in);
+  ARG(k, 2, s->target);
+  ARG(k, 3, s->nx);
+  ARG(k, 4, s->ny);
+  ARG(k, 5, s->stride);
+  ARG(k, 6, inv_dx);
+  ARG(k, 7, inv_dy);
+  ARG(k, 8, s->inv_2dx);
+  ARG(k, 9, s->inv_2dy);
+  LSM_TRY(run_2d(s, k, s->global, s->local, err));
+  const cl_int save_base = first;
+  k = s->k[K_PCL_ADVECT];
+  ARG(k, 0, s->px);
+  ARG(k, 1, s->py);
+  ARG(k, 2, s->px0);
+  ARG(k, 3, s->py0);
+  ARG(k, 4, s->pstate);
+  ARG(k, 5, s->pn);
+  ARG(k, 6, s->vel);
+  ARG(k, 7, s->nx);
+  ARG(k, 8, s->ny);
+  ARG(k, 9, inv_dx);
+  ARG(k, 10, inv_dy);
+  ARG(k, 11, c0);
+  ARG(k, 12, c1);
+  ARG(k, 13, dt);
+  ARG(k, 14, save_base);
+  return run_1d(s, k, (size_t)s->pn, err);
+}
+
+/* (Re)allocation of a particle buffer of `bytes` (the old one, if any, released). */
+static lsm_status pcl_buffer(cl_state *s, cl_mem *buf, size_t bytes, lsm_err *err) {
+  if (*buf) clReleaseMemObject(*buf);
+  *buf = NULL;
+  return new_buffer(s, bytes, buf, err);
+}
+
+static lsm_status fill_uint(cl_state *s, cl_mem buf, cl_uint value, size_t count, lsm_err *err) {
+  CL_TRY(s->c->name, "clEnqueueFillBuffer",
+         clEnqueueFillBuffer(s->queue, buf, &value, sizeof value, 0, count * sizeof value, 0,
+                             NULL, NULL));
+  return LSM_OK;
+}
+
+static lsm_status cl_pls_load(void *vs, const lsm_pls_view *set, int radius_adjust,
+                              lsm_err *err) {
+  cl_state *s = vs;
+  if (set->n > (size_t)INT32_MAX)
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "OpenCL: %s: %zu particles are too many", s->c->name,
+                    set->n);
+  if (set->n > 0 && (s->nx < 2 || s->ny < 2))
+    return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "OpenCL: particles on a %dx%d grid", s->nx, s->ny);
+  const size_t nodes = (size_t)s->nx * (size_t)s->ny;
+  if (!s->counters) { /* the first load (or a retry after a failed one) */
+    LSM_TRY(pcl_buffer(s, &s->vel, nodes * 4 * sizeof(float), err));
+    LSM_TRY(pcl_buffer(s, &s->plus, nodes * sizeof(cl_uint), err));
+    LSM_TRY(pcl_buffer(s, &s->minus, nodes * sizeof(cl_uint), err));
+    /* the accumulators' "no particle" keys (morph.cl: LSM_PCL_KEY_NONE_*);
+     * lsm_pcl_apply restores them after each correction */
+    LSM_TRY(fill_uint(s, s->plus, 0u, nodes, err));
+    LSM_TRY(fill_uint(s, s->minus, 0xFFFFFFFFu, nodes, err));
+    LSM_TRY(pcl_buffer(s, &s->counters, PCL_N_COUNT * sizeof(cl_int), err));
+  }
+  const size_t n = set->n;
+  if (n > s->pcap || !s->px) {
+    const size_t cap = n > 0 ? n : 1, fb = cap * sizeof(float);
+    s->pcap = 0;
+    LSM_TRY(pcl_buffer(s, &s->px, fb, err));
+    LSM_TRY(pcl_buffer(s, &s->py, fb, err));
+    LSM_TRY(pcl_buffer(s, &s->px0, fb, err));
+    LSM_TRY(pcl_buffer(s, &s->py0, fb, err));
+    LSM_TRY(pcl_buffer(s, &s->pradius, fb, err));
+    LSM_TRY(pcl_buffer(s, &s->psign, cap, err));
+    LSM_TRY(pcl_buffer(s, &s->pstate, cap, err));
+    s->pcap = cap;
+  }
+  s->pn = 0;
+  if (n > 0) {
+    const size_t fb = n * sizeof(float);
+    CL_TRY(s->c->name, "clEnqueueWriteBuffer",
+           clEnqueueWriteBuffer(s->queue, s->px, CL_FALSE, 0, fb, set->x, 0, NULL, NULL));
+    CL_TRY(s->c->name, "clEnqueueWriteBuffer",
+           clEnqueueWriteBuffer(s->queue, s->py, CL_FALSE, 0, fb, set->y, 0, NULL, NULL));
+    CL_TRY(s->c->name, "clEnqueueWriteBuffer",
+           clEnqueueWriteBuffer(s->queue, s->pradius, CL_FALSE, 0, fb, set->radius, 0, NULL, NULL));
+    CL_TRY(s->c->name, "clEnqueueWriteBuffer",
+           clEnqueueWriteBuffer(s->queue, s->psign, CL_FALSE, 0, n, set->sign, 0, NULL, NULL));
+    const cl_uchar live = 0; /* morph.cl: LSM_PCL_LIVE */
+    CL_TRY(s->c->name, "clEnqueueFillBuffer",
+           clEnqueueFillBuffer(s->queue, s->pstate, &live, 1, 0, n, 0, NULL, NULL));
+  }
+  /* The set may change once this returns: wait for the copies. */
+  CL_TRY(s->c->name, "clFinish", clFinish(s->queue));
+  s->pn = (cl_int)n;
+  s->radius_adjust = radius_adjust;
+  return LSM_OK;
+}
+
+static lsm_status cl_pls_correct(void *vs, lsm_pls_counts *counts, lsm_err *err) {
+  cl_state *s = vs;
+  memset(counts, 0, sizeof *counts);
+  if (s->pn == 0) return LSM_OK;
+  const cl_uint zero = 0;
+  LSM_TRY(fill_uint(s, s->counters, zero, PCL_N_COUNT, err));
+  cl_kernel k = s->k[K_PCL_DETECT];
+  ARG(k, 0, s->px);
+  ARG(k, 1, s->py);
+  ARG(k, 2, s->psign);
+  ARG(k, 3, s->pradius);
+  ARG(k, 4, s->pstate);
+  ARG(k, 5, s->pn);
+  ARG(k, 6, s->phi);
+  ARG(k, 7, s->nx);
+  ARG(k, 8, s->ny);
+  ARG(k, 9, s->stride);
+  ARG(k, 10, s->dx);
+  ARG(k, 11, s->dy);
+  ARG(k, 12, s->far);
+  ARG(k, 13, s->plus);
+  ARG(k, 14, s->minus);
+  ARG(k, 15, s->counters);
+  LSM_TRY(set_arg(s, k, 16, s->plocal * sizeof(cl_int), NULL, err));
+  LSM_TRY(run_1d(s, k, (size_t)s->pn, err));
+  k = s->k[K_PCL_APPLY];
+  ARG(k, 0, s->phi);
+  ARG(k, 1, s->nx);
+  ARG(k, 2, s->ny);
+  ARG(k, 3, s->stride);
+  ARG(k, 4, s->plus);
+  ARG(k, 5, s->minus);
+  ARG(k, 6, s->counters);
+  LSM_TRY(run_2d(s, k, s->global, s->local, err));
+  if (s->radius_adjust) {
+    k = s->k[K_PCL_RADIUS];
+    ARG(k, 0, s->px);
+    ARG(k, 1, s->py);
+    ARG(k, 2, s->psign);
+    ARG(k, 3, s->pradius);
+    ARG(k, 4, s->pstate);
+    ARG(k, 5, s->pn);
+    ARG(k, 6, s->phi);
+    ARG(k, 7, s->nx);
+    ARG(k, 8, s->ny);
+    ARG(k, 9, s->stride);
+    ARG(k, 10, s->rmin);
+    ARG(k, 11, s->rmax);
+    LSM_TRY(run_1d(s, k, (size_t)s->pn, err));
+  }
+  cl_int c[PCL_N_COUNT];
+  CL_TRY(s->c->name, "clEnqueueReadBuffer",
+         clEnqueueReadBuffer(s->queue, s->counters, CL_TRUE, 0, sizeof c, c, 0, NULL, NULL));
+  counts->removed = c[PCL_N_REMOVED];
+  counts->stray = c[PCL_N_STRAY];
+  counts->escaped = c[PCL_N_ESCAPED];
+  counts->corrected = c[PCL_N_CORRECTED];
+  counts->live = c[PCL_N_LIVE];
+  return LSM_OK;
+}
+
+/* ---- steps -------------------------------------------------------------------------------- */
+
+/* out = c0 u0 + c1 (in - dt Hhat(in)), after filling in's ghosts; a loaded
+ * particle set takes the same stage first (it reads `in` only).  first: the
+ * step's first stage. */
 static lsm_status stage(cl_state *s, lsm_scheme scheme, cl_mem out, cl_mem u0, cl_mem in,
-                        float c0, float c1, float dt, lsm_err *err) {
+                        float c0, float c1, float dt, int first, lsm_err *err) {
   LSM_TRY(fill_ghosts(s, in, err));
+  if (s->pn > 0) LSM_TRY(pcl_stage(s, in, c0, c1, dt, first, err));
   const float inv_dx = 1.0f / s->dx, inv_dy = 1.0f / s->dy;
   cl_kernel k = s->k[scheme == LSM_SCHEME_ROEFIX ? K_ROEFIX : K_UPWIND];
   ARG(k, 0, out);
@@ -887,24 +1117,25 @@ static lsm_status cl_step(void *vs, lsm_scheme scheme, lsm_time time, float dt,
   cl_state *s = vs;
   if (hook)
     return lsm_fail(err, LSM_ERR_UNSUPPORTED, NULL,
-                    "OpenCL: %s: particles run on the C backend only (use --backend c)",
+                    "OpenCL: %s: no stage hooks (phi stays on the device); particles run "
+                    "through pls_load and pls_correct",
                     s->c->name);
   switch (time) {
   case LSM_TIME_RK2:
     /* phi1 = phi - dt L(phi);  phi = 1/2 phi + 1/2 (phi1 - dt L(phi1)) */
-    LSM_TRY(stage(s, scheme, s->s1, s->phi, s->phi, 0.0f, 1.0f, dt, err));
-    LSM_TRY(stage(s, scheme, s->phi, s->phi, s->s1, 0.5f, 0.5f, dt, err));
+    LSM_TRY(stage(s, scheme, s->s1, s->phi, s->phi, 0.0f, 1.0f, dt, 1, err));
+    LSM_TRY(stage(s, scheme, s->phi, s->phi, s->s1, 0.5f, 0.5f, dt, 0, err));
     break;
   case LSM_TIME_RK3:
     /* phi1 = phi - dt L(phi); phi2 = 3/4 phi + 1/4 (phi1 - dt L(phi1));
      * phi = 1/3 phi + 2/3 (phi2 - dt L(phi2)) */
-    LSM_TRY(stage(s, scheme, s->s1, s->phi, s->phi, 0.0f, 1.0f, dt, err));
-    LSM_TRY(stage(s, scheme, s->s2, s->phi, s->s1, 0.75f, 0.25f, dt, err));
-    LSM_TRY(stage(s, scheme, s->phi, s->phi, s->s2, 1.0f / 3.0f, 2.0f / 3.0f, dt, err));
+    LSM_TRY(stage(s, scheme, s->s1, s->phi, s->phi, 0.0f, 1.0f, dt, 1, err));
+    LSM_TRY(stage(s, scheme, s->s2, s->phi, s->s1, 0.75f, 0.25f, dt, 0, err));
+    LSM_TRY(stage(s, scheme, s->phi, s->phi, s->s2, 1.0f / 3.0f, 2.0f / 3.0f, dt, 0, err));
     break;
   default:
     /* phi = phi - dt L(phi), into the scratch grid, which then becomes phi. */
-    LSM_TRY(stage(s, scheme, s->s1, s->phi, s->phi, 0.0f, 1.0f, dt, err));
+    LSM_TRY(stage(s, scheme, s->s1, s->phi, s->phi, 0.0f, 1.0f, dt, 1, err));
     swap_mem(&s->phi, &s->s1);
     break;
   }
@@ -970,6 +1201,15 @@ static lsm_grid *cl_host_phi(void *vs) {
   return NULL;
 }
 
-static const lsm_backend_ops cl_ops = {"opencl",    cl_create,   cl_cfl_dt, cl_step,
-                                       cl_reinit,   cl_residual, cl_download, cl_upload,
-                                       cl_host_phi, cl_destroy};
+static const lsm_backend_ops cl_ops = {.name = "opencl",
+                                       .create = cl_create,
+                                       .cfl_dt = cl_cfl_dt,
+                                       .step = cl_step,
+                                       .reinit = cl_reinit,
+                                       .residual = cl_residual,
+                                       .download = cl_download,
+                                       .upload = cl_upload,
+                                       .host_phi = cl_host_phi,
+                                       .destroy = cl_destroy,
+                                       .pls_load = cl_pls_load,
+                                       .pls_correct = cl_pls_correct};

@@ -2,8 +2,10 @@
  *
  * Pure functions of plain values, in the style of kernels/lsm_cell.h: no
  * memory access patterns, no I/O, no globals.  The scalar C path
- * (solver/lsm_particles.c) includes this file, and a future OpenCL path can
- * include it too, so both run the same arithmetic.
+ * (solver/lsm_particles.c) and the OpenCL kernels (kernels/morph.cl, which
+ * the build splices this file into) both include it, so both run the same
+ * arithmetic.  The helpers of the last section mirror formulas that
+ * solver/lsm_particles.c writes inline; only the OpenCL side calls them.
  *
  * Units.  Particle positions are in CELL coordinates: x = column, y = row,
  * continuous, with cell centres (grid nodes) at integers.  phi, radii, band
@@ -181,6 +183,63 @@ LSM_FN float lsm_pcl_merge(int s, float acc, float phi_p) {
  * else phi_minus. */
 LSM_FN float lsm_pcl_select(float phi_plus, float phi_minus) {
   return LSM_FABS(phi_plus) <= LSM_FABS(phi_minus) ? phi_plus : phi_minus;
+}
+
+/* ---- Mirrors of inline formulas of solver/lsm_particles.c ----------------------------
+ * solver/lsm_particles.c writes these inline (for vectorisation); the OpenCL
+ * path (kernels/morph.cl, kernels/lsm_backend_cl.c) calls them instead of
+ * copying the formulas.  Each names the C function it mirrors: a change there
+ * must be made here too (tests/test_opencl.c compares the two paths). */
+
+/* Constants of a particle set on a dx x dy grid, as lsm_pls_create sets them:
+ * r_min = 0.1 min(dx,dy), r_max = 0.5 min(dx,dy); and the stray distance of
+ * lsm_pls_correct, 1.5 max(dx,dy). */
+LSM_FN float lsm_pcl_rmin(float dx, float dy) { return 0.1f * (dx < dy ? dx : dy); }
+LSM_FN float lsm_pcl_rmax(float dx, float dy) { return 0.5f * (dx < dy ? dx : dy); }
+LSM_FN float lsm_pcl_far(float dx, float dy) { return 1.5f * (dx > dy ? dx : dy); }
+
+/* build_velocity: the node field of a stage at node (i, j) of an nx x ny grid,
+ * F = phi - phi_target and grad phi by central differences, one-sided at the
+ * grid edge.  c, t: phi and phi_target at the node; l, r, d, u: phi at the
+ * clamped neighbours (i-1, i+1, j-1, j+1); inv_dx = 1/dx, inv_2dx = 0.5/dx
+ * (likewise y), computed in float as lsm_pls_create does. */
+LSM_FN void lsm_pcl_node_field(int i, int j, int nx, int ny, float c, float t, float l, float r,
+                               float d, float u, float inv_dx, float inv_dy, float inv_2dx,
+                               float inv_2dy, LSM_PRIV float *F, LSM_PRIV float *gx,
+                               LSM_PRIV float *gy) {
+  const float wx = (i > 0 && i + 1 < nx) ? inv_2dx : inv_dx;
+  const float wy = (j > 0 && j + 1 < ny) ? inv_2dy : inv_dy;
+  *F = c - t;
+  *gx = (r - l) * wx;
+  *gy = (u - d) * wy;
+}
+
+/* advect: one coordinate after a Runge–Kutta stage,
+ *   c0 x_u0 + c1 (x + dt F n / h)   (inv_h = 1/dx or 1/dy),
+ * with the products in the C path's order (no contraction on either side).
+ * The unit normal n is lsm_pcl_normal of the interpolated gradient, which is
+ * advect's arithmetic too (1/g, then g_x * (1/g); the diagonal where g = 0). */
+LSM_FN float lsm_pcl_stage_coord(float c0, float x_u0, float c1, float x, float dt, float F,
+                                 float n, float inv_h) {
+  return c0 * x_u0 + c1 * (x + dt * F * n * inv_h);
+}
+
+/* lsm_pls_stage: a coordinate of a particle that left the domain, clamped to
+ * [0, hi] (hi = n-1); NaN is parked at 0. */
+LSM_FN float lsm_pcl_clamp_coord(float v, float hi) {
+  return v == v ? (v < 0.0f ? 0.0f : (v > hi ? hi : v)) : 0.0f;
+}
+
+/* detect: an escaped particle farther than `far` outside its side (|phi| >
+ * far) is a stray: removed, not used for the correction. */
+LSM_FN int lsm_pcl_stray(int escaped, float phi, float far) {
+  return escaped && LSM_FABS(phi) > far;
+}
+
+/* lsm_pls_correct's radius adjustment applies to particles on their own side:
+ * s phi > 0. */
+LSM_FN int lsm_pcl_own_side(int s, float phi) {
+  return (s > 0 && phi > 0.0f) || (s < 0 && phi < 0.0f);
 }
 
 #endif

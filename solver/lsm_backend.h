@@ -8,6 +8,13 @@
  * OpenCL backend (kernels/lsm_backend_cl.c) runs the same per-cell code
  * (kernels/lsm_cell.h) on a device, with the fields resident on the device
  * for the whole pair.
+ *
+ * Particles (--method pls).  The driver seeds them on the host
+ * (solver/lsm_particles.c).  A backend that keeps phi on the host (C) runs
+ * them there through the stage hook of `step`; a backend with the optional
+ * particle ops (OpenCL) takes a copy of the seeded set (pls_load) and then
+ * advects, detects and corrects on the device, with the same per-particle
+ * code (kernels/lsm_particle_cell.h).
  */
 #ifndef LSM_BACKEND_H
 #define LSM_BACKEND_H
@@ -15,6 +22,7 @@
 #include <stdio.h>
 
 #include "lsm_grid.h"
+#include "lsm_particles.h"
 #include "lsm_scheme.h"
 #include "lsm_status.h"
 
@@ -29,6 +37,18 @@ typedef enum lsm_backend_kind {
 
 const char *lsm_backend_kind_name(lsm_backend_kind kind);
 lsm_backend_kind lsm_backend_kind_from_name(const char *name);
+
+/* What one particle correction on a backend did (lsm_backend_ops.pls_correct);
+ * the driver adds these to its lsm_pls_stats as lsm_pls_correct would. */
+typedef struct lsm_pls_counts {
+  long long removed;   /* removed first: left the domain in this step's stages, or
+                          strays flagged by the previous correction */
+  long long stray;     /* escaped by more than 1.5 max(dx,dy): flagged, removed by
+                          the next correction (lsm_pls_stats.stray) */
+  long long escaped;   /* escaped particles that corrected phi */
+  long long corrected; /* grid values changed */
+  long long live;      /* particles in the set after detection, strays included */
+} lsm_pls_counts;
 
 typedef struct lsm_backend_ops {
   const char *name;
@@ -53,6 +73,18 @@ typedef struct lsm_backend_ops {
   /* The live host grid of phi when the backend keeps it on the host, else NULL. */
   lsm_grid *(*host_phi)(void *state);
   void (*destroy)(void **state);
+  /* ---- optional: particles on the backend (NULL where absent) ----
+   * pls_load: replaces the backend's particle set with a copy of `set` (all
+   * live; positions as lsm_pls_view gives them), e.g. once per pair after
+   * lsm_pls_create and after each host reseeding.  radius_adjust: the
+   * lsm_pls_opts option.  While a non-empty set is loaded, `step` (with a NULL
+   * hook) advects it at every stage exactly as lsm_pls_stage does.
+   * pls_correct: lsm_pls_correct without the reseeding, on the backend's phi:
+   * removal of flagged particles, detection, strays, the correction of phi
+   * (Eq. 3.23-3.26), the radius adjustment; *counts says what it did.  The
+   * result does not depend on the particle order. */
+  lsm_status (*pls_load)(void *state, const lsm_pls_view *set, int radius_adjust, lsm_err *err);
+  lsm_status (*pls_correct)(void *state, lsm_pls_counts *counts, lsm_err *err);
 } lsm_backend_ops;
 
 typedef struct lsm_backend {

@@ -89,8 +89,20 @@ static lsm_status c_upload(void *state, const lsm_grid *phi, lsm_err *err) {
 
 static lsm_grid *c_host_phi(void *state) { return ((c_state *)state)->phi; }
 
-static const lsm_backend_ops c_ops = {"c",        c_create,   c_cfl_dt, c_step,     c_reinit,
-                                      c_residual, c_download, c_upload, c_host_phi, c_destroy};
+/* Particles run on the host phi through the stage hook (solver/lsm_particles.c):
+ * no particle ops. */
+static const lsm_backend_ops c_ops = {.name = "c",
+                                      .create = c_create,
+                                      .cfl_dt = c_cfl_dt,
+                                      .step = c_step,
+                                      .reinit = c_reinit,
+                                      .residual = c_residual,
+                                      .download = c_download,
+                                      .upload = c_upload,
+                                      .host_phi = c_host_phi,
+                                      .destroy = c_destroy,
+                                      .pls_load = NULL,
+                                      .pls_correct = NULL};
 
 const lsm_backend_ops *lsm_backend_c_ops(void) { return &c_ops; }
 

@@ -11,7 +11,10 @@ struct lsm_morph {
   lsm_grid *phi_target;  /* host copy of the target */
   lsm_grid *phi_host;    /* host mirror of phi for device backends */
   int host_stale;        /* phi_host is older than the device's phi */
-  lsm_particles *pls;
+  lsm_particles *pls;    /* the host set: seeded here; stepped here unless pls_device */
+  int pls_device;        /* particles run on the backend (its pls_load / pls_correct) */
+  lsm_pls_stats pls_stats; /* ... and then their counters, kept here */
+  long long pls_live;    /* ... and how many particles the backend holds */
   lsm_err err;           /* why the last lsm_morph_phi failed */
   double dt, time, cp, residual;
   int iterations;
@@ -54,20 +57,30 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
   m->opts = *opts;
   if (m->opts.threads < 1) m->opts.threads = 1;
   m->ops = opts->backend ? opts->backend->ops : lsm_backend_c_ops();
-  if (opts->particles && m->ops != lsm_backend_c_ops()) {
-    lsm_morph_destroy(&m);
-    return lsm_fail(err, LSM_ERR_UNSUPPORTED, NULL,
-                    "--method pls runs on the C backend only (use --backend c)");
-  }
   lsm_status st = m->ops->create(opts->backend ? opts->backend->ctx : NULL, phi_source,
                                  phi_target, m->opts.threads, &m->state, err);
   if (st == LSM_OK) st = lsm_grid_clone(phi_target, &m->phi_target, err);
   if (st == LSM_OK && !m->ops->host_phi(m->state))
     st = lsm_grid_clone(phi_source, &m->phi_host, err);
   if (st == LSM_OK && opts->particles) {
+    /* Particles on the backend when it has the particle ops, else through the
+     * stage hook on the host phi; seeded on the host either way. */
+    m->pls_device = m->ops->pls_load && m->ops->pls_correct;
+    if (!m->pls_device && !m->ops->host_phi(m->state))
+      st = lsm_fail(err, LSM_ERR_UNSUPPORTED, NULL,
+                    "--method pls: the %s backend cannot run particles (use --backend c)",
+                    m->ops->name);
+  }
+  if (st == LSM_OK && opts->particles) {
     lsm_pls_opts po = opts->pls;
     po.threads = m->opts.threads;
     st = lsm_pls_create(phi_source, &po, &m->pls, err);
+  }
+  if (st == LSM_OK && m->pls_device) {
+    const lsm_pls_view set = lsm_pls_view_get(m->pls);
+    st = m->ops->pls_load(m->state, &set, opts->pls.radius_adjust, err);
+    m->pls_stats = *lsm_pls_stats_get(m->pls);
+    m->pls_live = (long long)set.n;
   }
   if (st == LSM_OK) st = m->ops->cfl_dt(m->state, opts->cfl, &m->dt, err);
   if (st == LSM_OK) st = m->ops->residual(m->state, &m->residual, err);
@@ -82,6 +95,57 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
   return LSM_OK;
 }
 
+/* Reseeding of a set that runs on the backend, on the host: phi comes down,
+ * the host set (emptied) takes reseed_every empty corrections so that its own
+ * correction counter reaches its next reseeding, which then seeds the next
+ * generation on phi exactly as lsm_pls_correct does on the C path; the new
+ * set goes up.  Empty corrections leave phi's interior alone. */
+static lsm_status device_reseed(lsm_morph *m, lsm_err *err) {
+  LSM_TRY(m->ops->download(m->state, m->phi_host, err));
+  const lsm_pls_stats before = *lsm_pls_stats_get(m->pls);
+  const float none_f[1] = {0.0f}; /* no particles (valid pointers all the same) */
+  const int8_t none_s[1] = {1};
+  LSM_TRY(lsm_pls_set(m->pls, 0, none_f, none_f, none_s, none_f, err));
+  for (int q = 0; q < m->opts.pls.reseed_every; ++q)
+    LSM_TRY(lsm_pls_correct(m->pls, m->phi_host, err));
+  const lsm_pls_stats *after = lsm_pls_stats_get(m->pls);
+  if (after->reseeds != before.reseeds + 1)
+    return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "particles: the host set did not reseed");
+  lsm_pls_stats *q = &m->pls_stats;
+  q->reseed_dropped += m->pls_live;
+  q->reseeds++;
+  q->seeded += after->seeded - before.seeded;
+  q->discarded += after->discarded - before.discarded;
+  q->band_cells = after->band_cells;
+  const lsm_pls_view set = lsm_pls_view_get(m->pls);
+  LSM_TRY(m->ops->pls_load(m->state, &set, m->opts.pls.radius_adjust, err));
+  m->pls_live = (long long)set.n;
+  return LSM_OK;
+}
+
+/* lsm_pls_correct for a set on the backend: the correction there, the
+ * counters here (as lsm_pls_correct counts), reseeding on the host. */
+static lsm_status device_correct(lsm_morph *m, lsm_err *err) {
+  lsm_pls_counts c;
+  LSM_TRY(m->ops->pls_correct(m->state, &c, err));
+  lsm_pls_stats *q = &m->pls_stats;
+  q->left_domain += c.removed;
+  q->stray += c.stray;
+  q->escaped_last = c.escaped;
+  q->corrected_last = c.corrected;
+  q->escaped_total += c.escaped;
+  q->corrected_total += c.corrected;
+  q->steps++;
+  m->pls_live -= c.removed;
+  if (c.live != m->pls_live)
+    return lsm_fail(err, LSM_ERR_INTERNAL, NULL,
+                    "particles: the %s backend holds %lld live particles, %lld expected",
+                    m->ops->name, c.live, m->pls_live);
+  if (m->opts.pls.reseed_every > 0 && q->steps % m->opts.pls.reseed_every == 0)
+    LSM_TRY(device_reseed(m, err));
+  return LSM_OK;
+}
+
 lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
   double dt = m->dt < max_dt ? m->dt : max_dt;
   if (!(dt > 0.0)) return LSM_OK;
@@ -91,15 +155,20 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
     m->cp = 0.0;
     return LSM_OK;
   }
+  /* Particles on the host ride the stage hook; on a backend with particle
+   * ops, step advects the loaded set itself. */
   lsm_stage_hook hook = {m->pls, lsm_pls_stage_hook};
-  if (m->pls) lsm_pls_begin_step(m->pls, lsm_time_stages(m->opts.time));
-  LSM_TRY(m->ops->step(m->state, m->opts.scheme, m->opts.time, (float)dt, m->pls ? &hook : NULL,
+  const int host_pls = m->pls && !m->pls_device;
+  if (host_pls) lsm_pls_begin_step(m->pls, lsm_time_stages(m->opts.time));
+  LSM_TRY(m->ops->step(m->state, m->opts.scheme, m->opts.time, (float)dt, host_pls ? &hook : NULL,
                        err));
   m->iterations++;
   m->time += dt;
   m->host_stale = 1;
-  /* Particles repair phi where they escaped (Alg. 3.3); C backend: phi is on the host. */
-  if (m->pls) LSM_TRY(lsm_pls_correct(m->pls, m->ops->host_phi(m->state), err));
+  /* Particles repair phi where they escaped (Alg. 3.3): on the host phi (C
+   * backend) or on the backend's. */
+  if (host_pls) LSM_TRY(lsm_pls_correct(m->pls, m->ops->host_phi(m->state), err));
+  if (m->pls_device) LSM_TRY(device_correct(m, err));
   if (m->opts.reinit_every > 0 && m->iterations % m->opts.reinit_every == 0)
     LSM_TRY(m->ops->reinit(m->state, m->opts.reinit_iters, err));
   if (m->opts.track_cp || m->iterations % 16 == 0) {
@@ -148,7 +217,8 @@ const lsm_grid *lsm_morph_phi(lsm_morph *m) {
 const lsm_grid *lsm_morph_target(const lsm_morph *m) { return m->phi_target; }
 const lsm_err *lsm_morph_error(const lsm_morph *m) { return &m->err; }
 const lsm_pls_stats *lsm_morph_pls_stats(const lsm_morph *m) {
-  return m->pls ? lsm_pls_stats_get(m->pls) : NULL;
+  if (!m->pls) return NULL;
+  return m->pls_device ? &m->pls_stats : lsm_pls_stats_get(m->pls);
 }
 double lsm_morph_time(const lsm_morph *m) { return m->time; }
 double lsm_morph_dt(const lsm_morph *m) { return m->dt; }

@@ -7,6 +7,14 @@
  *   max |phi_opencl - phi_c| <= 1e-4 * max(nx, ny) * dx,
  *   the masks phi <= 0 differ in <= 0.1 % of the cells,
  *   the CFL dt and the residual agree to 1e-5 relative (every step).
+ * The particle level set (--method pls) the same way, through lsm_morph on
+ * both backends (particles seeded on the host, then advected, detected and
+ * corrected on the device): for each scheme and integrator, 240 steps, the
+ * same limits on phi and the masks, and the same particle counters (seeded,
+ * discarded, left the domain, strays, escaped, corrected, reseeding), with
+ * reseeding and radius adjustment in two more cases.  One correction with
+ * hand-placed particles (many escaped, some strays) against lsm_pls_correct,
+ * and in reverse particle order (the device result must not depend on it).
  * Also: device listing, a missing device index, the kernel cache (a second
  * open hits it), ghost fill on download, upload, the stage hook refusal.
  *
@@ -21,6 +29,8 @@
 
 #include "solver/lsm_backend.h"
 #include "solver/lsm_grid.h"
+#include "solver/lsm_morph.h"
+#include "solver/lsm_particles.h"
 #include "solver/lsm_scheme.h"
 #include "solver/lsm_status.h"
 
@@ -272,11 +282,24 @@ static void test_plumbing(void **state) {
   assert_true(norm == 0.0);
   assert_int_equal(ops->cfl_dt(st, 0.75, &dt, &err), LSM_OK);
   assert_true(isinf(dt));
-  /* Stage hooks (particles) are refused. */
+  /* Stage hooks are refused (phi is on the device); particles have their ops. */
   lsm_stage_hook hook = {NULL, NULL};
   assert_int_equal(ops->step(st, LSM_SCHEME_UPWIND, LSM_TIME_EULER, 0.1f, &hook, &err),
                    LSM_ERR_UNSUPPORTED);
-  assert_non_null(strstr(err.msg, "particles run on the C backend only"));
+  assert_non_null(strstr(err.msg, "no stage hooks"));
+  assert_non_null(ops->pls_load);
+  assert_non_null(ops->pls_correct);
+  assert_null(lsm_backend_c_ops()->pls_load);
+  assert_null(lsm_backend_c_ops()->pls_correct);
+  /* An empty particle set: a correction does nothing. */
+  lsm_pls_view none = {0, NULL, NULL, NULL, NULL};
+  lsm_pls_counts counts = {1, 1, 1, 1, 1};
+  lsm_err_clear(&err);
+  assert_int_equal(ops->pls_load(st, &none, 1, &err), LSM_OK);
+  assert_int_equal(ops->pls_correct(st, &counts, &err), LSM_OK);
+  assert_true(counts.removed == 0 && counts.stray == 0 && counts.escaped == 0 &&
+              counts.corrected == 0 && counts.live == 0);
+  assert_int_equal(ops->step(st, LSM_SCHEME_UPWIND, LSM_TIME_RK3, 0.1f, NULL, &err), LSM_OK);
   /* Reinit with 0 iterations is a no-op. */
   lsm_err_clear(&err);
   assert_int_equal(ops->reinit(st, 0, &err), LSM_OK);
@@ -433,6 +456,232 @@ static const morph_case cases[] = {
 
 #define MORPH(k, name) {name, test_morph_matches_c, NULL, NULL, (void *)&cases[k]}
 
+/* ------------------------------------------------------------------------ */
+/* particles                                                                 */
+
+static lsm_particles *new_pls(const lsm_grid *phi) {
+  lsm_particles *p = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  if (lsm_pls_create(phi, NULL, &p, &err) != LSM_OK) fail_msg("lsm_pls_create: %s", err.msg);
+  return p;
+}
+
+/* One correction with hand-placed particles: 3000 particles at random
+ * positions, signs and radii on a disc SDF (about half on the wrong side:
+ * escaped, some farther than 1.5 cells: strays), corrected by lsm_pls_correct
+ * on the host and by pls_correct on the device, in the given order and in
+ * reverse: the same phi and the same counts. */
+static void test_pls_correct_matches_c(void **state) {
+  (void)state;
+  NEED_DEVICE();
+  const int nx = 45, ny = 38;
+  const float dx = 0.8f, dy = 1.1f;
+  lsm_grid *phi = new_grid(nx, ny, dx, dy), *ref = new_grid(nx, ny, dx, dy);
+  lsm_grid *got = new_grid(nx, ny, dx, dy);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      LSM_AT(phi, i, j) = (float)(hypot((i - 21.3) * dx, (j - 17.6) * dy) - 11.0);
+  lsm_grid_fill_ghosts(phi);
+  lsm_grid_copy(ref, phi);
+  enum { N = 3000 };
+  static float x[N], y[N], r[N], rx[N], ry[N], rr[N];
+  static int8_t sg[N], rs[N];
+  uint64_t seed = 0x9e3779b97f4a7c15ULL;
+  for (int k = 0; k < N; ++k) {
+    /* near the front (radius 11 around the centre), +-3 physical units */
+    const double a = (double)(lsm_test_rand(&seed) % 100000) * (6.283185307179586 / 100000.0);
+    const double d = 11.0 + ((double)(lsm_test_rand(&seed) % 10000) / 10000.0 - 0.5) * 6.0;
+    x[k] = (float)(21.3 + d * cos(a) / dx);
+    y[k] = (float)(17.6 + d * sin(a) / dy);
+    sg[k] = (lsm_test_rand(&seed) & 1) ? 1 : -1;
+    r[k] = 0.08f + 0.4f * (float)(lsm_test_rand(&seed) % 1000) / 1000.0f;
+    rx[N - 1 - k] = x[k];
+    ry[N - 1 - k] = y[k];
+    rr[N - 1 - k] = r[k];
+    rs[N - 1 - k] = sg[k];
+  }
+  lsm_particles *p = new_pls(ref);
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_pls_set(p, N, x, y, sg, r, &err), LSM_OK);
+  const lsm_pls_view set = lsm_pls_view_get(p);
+  const lsm_pls_view rev = {N, rx, ry, rr, rs};
+  const lsm_backend_ops *ops = fx.cl->ops;
+  void *st = NULL;
+  assert_int_equal(ops->create(fx.cl->ctx, phi, phi, 1, &st, &err), LSM_OK);
+  lsm_pls_counts c[2];
+  for (int pass = 0; pass < 2; ++pass) {
+    assert_int_equal(ops->upload(st, phi, &err), LSM_OK);
+    assert_int_equal(ops->pls_load(st, pass ? &rev : &set, 0, &err), LSM_OK);
+    assert_int_equal(ops->pls_correct(st, &c[pass], &err), LSM_OK);
+    if (pass == 0) {
+      /* the host set is read by pls_load only: correct it now */
+      assert_int_equal(lsm_pls_correct(p, ref, &err), LSM_OK);
+    }
+    assert_int_equal(ops->download(st, got, &err), LSM_OK);
+    double max_diff = 0.0;
+    long changed = 0;
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const double d = fabs((double)LSM_AT(ref, i, j) - (double)LSM_AT(got, i, j));
+        if (d > max_diff) max_diff = d;
+        changed += LSM_AT(ref, i, j) != LSM_AT(phi, i, j);
+      }
+    const lsm_pls_stats *q = lsm_pls_stats_get(p);
+    print_message("opencl: pls correction (%s order): %lld escaped, %lld strays, %lld corrected "
+                  "(C: %lld, %lld, %lld); max|phi_cl - phi_c| = %.3g\n",
+                  pass ? "reverse" : "seeded", c[pass].escaped, c[pass].stray,
+                  c[pass].corrected, q->escaped_last, q->stray, q->corrected_last, max_diff);
+    assert_true(max_diff == 0.0);
+    assert_int_equal(c[pass].escaped, q->escaped_last);
+    assert_int_equal(c[pass].stray, q->stray);
+    assert_int_equal(c[pass].corrected, q->corrected_last);
+    assert_int_equal(c[pass].removed, 0);
+    assert_int_equal(c[pass].live, N);
+    assert_int_equal(c[pass].corrected, changed);
+    assert_true(q->escaped_last > 100 && q->stray > 10 && q->corrected_last > 100);
+  }
+  /* The strays go at the next correction. */
+  lsm_pls_counts next;
+  assert_int_equal(ops->pls_correct(st, &next, &err), LSM_OK);
+  assert_int_equal(next.removed, c[1].stray);
+  assert_int_equal(next.live, N - c[1].stray);
+  ops->destroy(&st);
+  lsm_pls_destroy(&p);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&ref);
+  lsm_grid_destroy(&got);
+}
+
+typedef struct pls_case {
+  lsm_scheme scheme;
+  lsm_time time;
+  int reseed_every, radius_adjust;
+  int nx, ny;
+  float dx, dy;
+  int harsh; /* 1: fill_pls_pair, else fill_pair */
+} pls_case;
+
+/* A pair that works the particles harder than fill_pair: the source is the
+ * SDF of a box (sharp corners: particles escape there, some far enough to be
+ * strays), the target a disc that runs past the right edge of the grid (the
+ * front moves out to the edge: particles leave the domain). */
+static void fill_pls_pair(lsm_grid *src, lsm_grid *dst) {
+  const int nx = src->nx, ny = src->ny;
+  const double w = nx * (double)src->dx, h = ny * (double)src->dy;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double x = (i + 0.5) * src->dx, y = (j + 0.5) * src->dy;
+      const double qx = fabs(x - 0.4 * w) - 0.22 * w, qy = fabs(y - 0.5 * h) - 0.3 * h;
+      const double out = hypot(qx > 0 ? qx : 0, qy > 0 ? qy : 0);
+      const double in = qx > qy ? qx : qy;
+      LSM_AT(src, i, j) = (float)(in < 0 ? in : out);
+      LSM_AT(dst, i, j) = (float)(hypot(x - 0.8 * w, y - 0.45 * h) - 0.36 * h);
+    }
+  lsm_grid_fill_ghosts(src);
+  lsm_grid_fill_ghosts(dst);
+}
+
+/* The pls morph through lsm_morph on both backends (as the pair driver runs
+ * it), 240 steps. */
+static void test_pls_matches_c(void **state) {
+  const pls_case *pc = *state;
+  NEED_DEVICE();
+  const int nx = pc->nx, ny = pc->ny, steps = 240;
+  lsm_grid *src = new_grid(nx, ny, pc->dx, pc->dy), *dst = new_grid(nx, ny, pc->dx, pc->dy);
+  if (pc->harsh)
+    fill_pls_pair(src, dst);
+  else
+    fill_pair(src, dst);
+  lsm_morph_opts o;
+  lsm_morph_opts_default(&o);
+  o.scheme = pc->scheme;
+  o.time = pc->time;
+  o.particles = 1;
+  o.pls.reseed_every = pc->reseed_every;
+  o.pls.radius_adjust = pc->radius_adjust;
+  lsm_morph *mc = NULL, *mg = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_morph_create(src, dst, &o, &mc, &err), LSM_OK);
+  o.backend = fx.cl;
+  if (lsm_morph_create(src, dst, &o, &mg, &err) != LSM_OK) fail_msg("%s", err.msg);
+  assert_true(lsm_morph_dt(mc) == lsm_morph_dt(mg));
+  for (int n = 0; n < steps; ++n) {
+    if (lsm_morph_step(mc, INFINITY, &err) != LSM_OK) fail_msg("C: %s", err.msg);
+    if (lsm_morph_step(mg, INFINITY, &err) != LSM_OK) fail_msg("OpenCL: %s", err.msg);
+  }
+  const lsm_grid *ref = lsm_morph_phi(mc), *got = lsm_morph_phi(mg);
+  assert_non_null(ref);
+  assert_non_null(got);
+  double max_diff = 0.0;
+  long mask_diff = 0;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const float a = LSM_AT(ref, i, j), b = LSM_AT(got, i, j);
+      assert_true(isfinite(b));
+      const double d = fabs((double)a - (double)b);
+      if (d > max_diff) max_diff = d;
+      mask_diff += (a <= 0.0f) != (b <= 0.0f);
+    }
+  const lsm_pls_stats *qc = lsm_morph_pls_stats(mc), *qg = lsm_morph_pls_stats(mg);
+  assert_non_null(qc);
+  assert_non_null(qg);
+  const long long live_c = qc->seeded - qc->discarded - qc->left_domain - qc->reseed_dropped;
+  const long long live_g = qg->seeded - qg->discarded - qg->left_domain - qg->reseed_dropped;
+  const double extent = (nx > ny ? nx * (double)pc->dx : ny * (double)pc->dy);
+  print_message("opencl: pls %-7s %-5s reseed %d radius %d %s %dx%d: max|phi_cl - phi_c| = %.3g "
+                "(limit %.3g), masks differ in %ld cells; particles C/CL: seeded %lld/%lld, "
+                "live %lld/%lld, left %lld/%lld (strays %lld/%lld), escaped %lld/%lld, "
+                "corrected %lld/%lld\n",
+                lsm_scheme_name(pc->scheme), lsm_time_name(pc->time), pc->reseed_every,
+                pc->radius_adjust, pc->harsh ? "box" : "disc", nx, ny, max_diff, 1e-4 * extent, mask_diff, qc->seeded,
+                qg->seeded, live_c, live_g, qc->left_domain, qg->left_domain, qc->stray,
+                qg->stray, qc->escaped_total, qg->escaped_total, qc->corrected_total,
+                qg->corrected_total);
+  assert_true(max_diff <= 1e-4 * extent);
+  assert_true((double)mask_diff <= 0.001 * nx * ny);
+  assert_int_equal(qg->steps, steps);
+  assert_int_equal(qc->steps, qg->steps);
+  assert_int_equal(qc->seeded, qg->seeded);
+  assert_int_equal(qc->discarded, qg->discarded);
+  assert_int_equal(qc->left_domain, qg->left_domain);
+  assert_int_equal(qc->stray, qg->stray);
+  assert_int_equal(qc->reseed_dropped, qg->reseed_dropped);
+  assert_int_equal(qc->reseeds, qg->reseeds);
+  assert_int_equal(qc->band_cells, qg->band_cells);
+  assert_int_equal(qc->escaped_total, qg->escaped_total);
+  assert_int_equal(qc->corrected_total, qg->corrected_total);
+  assert_int_equal(live_c, live_g);
+  assert_int_equal((long long)0 + live_c, 0 + (long long)qc->seeded - qc->discarded -
+                                              qc->left_domain - qc->reseed_dropped);
+  /* the particles did work: escaped and corrected; on the harsh pair also
+   * left the domain, and strayed (Euler and RK2 without radius adjustment) */
+  assert_true(qc->escaped_total > 0 && qc->corrected_total > 0);
+  if (pc->harsh) assert_true(qc->left_domain > qc->stray);
+  if (pc->harsh && pc->time != LSM_TIME_RK3 && !pc->radius_adjust) assert_true(qc->stray > 0);
+  if (pc->reseed_every > 0) assert_int_equal(qg->reseeds, steps / pc->reseed_every);
+  lsm_morph_destroy(&mc);
+  lsm_morph_destroy(&mg);
+  lsm_grid_destroy(&src);
+  lsm_grid_destroy(&dst);
+}
+
+#define PCASE(s, t, harsh) {s, t, 0, 0, 96, 80, 1.0f, 1.0f, harsh}
+static const pls_case pls_cases[] = {
+    PCASE(LSM_SCHEME_UPWIND, LSM_TIME_EULER, 1), PCASE(LSM_SCHEME_UPWIND, LSM_TIME_RK2, 1),
+    PCASE(LSM_SCHEME_UPWIND, LSM_TIME_RK3, 1),   PCASE(LSM_SCHEME_ROEFIX, LSM_TIME_EULER, 1),
+    PCASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK2, 1),   PCASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK3, 1),
+    PCASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK2, 0),
+    /* reseeding (a host round trip) and radius adjustment */
+    {LSM_SCHEME_UPWIND, LSM_TIME_RK2, 25, 1, 96, 80, 1.0f, 1.0f, 1},
+    /* unequal spacing, no multiple of any work-group */
+    {LSM_SCHEME_ROEFIX, LSM_TIME_RK3, 40, 1, 53, 131, 0.5f, 0.75f, 1},
+};
+
+#define PLS(k, name) {name, test_pls_matches_c, NULL, NULL, (void *)&pls_cases[k]}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_list_devices),
@@ -454,6 +703,16 @@ int main(void) {
       MORPH(10, "morph roe-fix rk2 reinit"),
       MORPH(11, "morph roe-fix rk3 reinit"),
       MORPH(12, "morph roe-fix rk2 reinit 53x131 dx 0.5 dy 0.75"),
+      cmocka_unit_test(test_pls_correct_matches_c),
+      PLS(0, "pls upwind euler"),
+      PLS(1, "pls upwind rk2"),
+      PLS(2, "pls upwind rk3"),
+      PLS(3, "pls roe-fix euler"),
+      PLS(4, "pls roe-fix rk2"),
+      PLS(5, "pls roe-fix rk3"),
+      PLS(6, "pls roe-fix rk2 disc to ellipse"),
+      PLS(7, "pls upwind rk2 reseed 25 radius adjust"),
+      PLS(8, "pls roe-fix rk3 reseed 40 radius adjust 53x131 dx 0.5 dy 0.75"),
   };
   return cmocka_run_group_tests_name("test_opencl", tests, group_setup, group_teardown);
 }

@@ -2,11 +2,12 @@
 # End-to-end tests of the OpenCL backend.
 #   sh tests/test_opencl.sh BUILD_DIR
 # Whole `lsmorph reconstruct` runs with --backend c and --backend opencl on
-# generated stacks (the candlestick set, masks) and on every 8th slice of the
-# bunny (../shared/data/bunny, when present) must agree within 1e-3 in every
-# voxel of volume.nrrd; `lsmorph devices` lists a device; a missing device
-# index and --method pls on OpenCL fail with exit 1 and a message; the second
-# run hits the kernel cache.  Prints one line per failed check and
+# generated stacks (the candlestick set, masks; the pyramid set, outlines) and
+# on every 8th slice of the bunny (../shared/data/bunny, when present), with
+# --method ls and --method pls, must agree within 1e-3 in every voxel of
+# volume.nrrd (and pls runs must report the same particle counters in
+# run.json); `lsmorph devices` lists a device; a missing device index fails
+# with exit 1 and a message; the second run hits the kernel cache.  Prints one line per failed check and
 # "opencl: N passed, N failed".  Without any OpenCL platform or device the
 # checks are skipped (the Makefile installs PoCL, so on CI they run).
 set -u
@@ -137,6 +138,16 @@ compare() {
     awk -v d="$d" -v t="$TOL" 'BEGIN { exit !(d != "size" && d != "nan" && d + 0 <= t + 0) }'
   check "$name: run.json names the opencl backend" \
     grep -q '"backend": {"name": "opencl"' "$TMP/$name-opencl/run.json"
+  case " $* " in
+  *" pls "*)
+    # The particle counters of every pair, in order: the same on both backends.
+    grep -o '"particles": {[^}]*}' "$TMP/$name-c/run.json" >"$TMP/$name-c.pcl"
+    grep -o '"particles": {[^}]*}' "$TMP/$name-opencl/run.json" >"$TMP/$name-opencl.pcl"
+    check "$name: run.json has particle counters" [ -s "$TMP/$name-opencl.pcl" ]
+    check "$name: the particle counters agree ($(diff "$TMP/$name-c.pcl" "$TMP/$name-opencl.pcl" | head -3))" \
+      cmp -s "$TMP/$name-c.pcl" "$TMP/$name-opencl.pcl"
+    ;;
+  esac
 }
 
 compare candlestick "$SET" --heights "$SET/heights.txt" --dz 10
@@ -147,12 +158,17 @@ compare candlestick-roefix-rk3 "$SET" --heights "$SET/heights.txt" --dz 10 \
 check "the second OpenCL run hit the kernel cache" \
   grep -q '"kernel_cache_hit": true' "$TMP/candlestick-roefix-rk3-opencl/run.json"
 check "one kernel binary in the cache" [ "$(ls "$XDG_CACHE_HOME/lsmorph" | grep -c '\.clbin$')" -eq 1 ]
-"$LSM" reconstruct "$SET" -o "$TMP/pls" --backend opencl --method pls \
-  --heights "$SET/heights.txt" --dz 10 -q >"$TMP/o" 2>"$TMP/e"
-rc=$?
-check "--method pls --backend opencl exits 1 (got $rc)" [ $rc -eq 1 ]
-check "--method pls --backend opencl names the C backend (got: $(cat "$TMP/e"))" \
-  grep -q 'C backend only' "$TMP/e"
+# The particle level set on the device (seeded on the host, stepped and
+# corrected on the device), with and without host reseeding.
+compare candlestick-pls "$SET" --heights "$SET/heights.txt" --dz 10 --method pls
+compare candlestick-pls-reseed "$SET" --heights "$SET/heights.txt" --dz 10 --method pls \
+  --scheme roe-fix --time rk3 --pls-reseed 7 --pls-radius-adjust
+if "$GEN" pyramid "$TMP/syn" >"$TMP/o" 2>"$TMP/e"; then
+  compare pyramid-pls "$TMP/syn/pyramid" --input outline --heights "$TMP/syn/pyramid/heights.txt" \
+    --method pls --time rk2
+else
+  bad "gen_synthetic pyramid failed: $(cat "$TMP/e")"
+fi
 "$LSM" reconstruct "$SET" -o "$TMP/blend" --backend opencl --method blend \
   --heights "$SET/heights.txt" --dz 10 -q >"$TMP/o" 2>"$TMP/e"
 check "--method blend --backend opencl (host path) exits 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
@@ -167,6 +183,7 @@ if [ -d "$BUNNY" ]; then
     k=$((k + 1))
   done
   compare bunny "$TMP/bunny" --spacing 8 --dz 2
+  compare bunny-pls "$TMP/bunny" --spacing 8 --dz 2 --method pls
 else
   echo "opencl: note: $BUNNY not found, bunny comparison not run"
 fi
