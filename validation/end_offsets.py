@@ -15,7 +15,8 @@ the scores averaged over the offsets, per shape and method.
         [-- EXTRA LSMORPH OPTIONS]
 
 Shapes: the bunny (../shared/data/bunny, when present) and analytic solids on
-128 x 128 slices, 100 slices tall.  Takes a few minutes.
+128 x 128 slices, 100 slices tall (also smallball, tube, fork, torus: small,
+slanted and branching structures).  Takes a few minutes.
 """
 import json
 import os
@@ -46,6 +47,17 @@ def solid(name):
         return (x ** 2 + y ** 2 < 40 ** 2) & (abs(z) < 45)
     if name == "cone":  # a flat base and a pointed tip
         return (np.sqrt(x ** 2 + y ** 2) < 0.9 * (45 - z)) & (z > -45) & (z < 45)
+    if name == "smallball":  # a structure a few pixels across
+        return x ** 2 + y ** 2 + (z / 4) ** 2 < 7 ** 2
+    if name == "tube":  # a thin vessel crossing the slices at a slant (1.2 px per slice)
+        return (x - 1.2 * z) ** 2 + y ** 2 < 5 ** 2
+    if name == "fork":  # one tube splitting into two
+        left = (x + 0.5 * np.maximum(z, 0)) ** 2 + y ** 2 < 6 ** 2
+        right = (x - 0.5 * np.maximum(z, 0)) ** 2 + y ** 2 < 6 ** 2
+        return (left | right) & (abs(z) < 45)
+    if name == "torus":  # a ring lying across the slices
+        r = np.sqrt(x ** 2 + z ** 2)
+        return (r - 32) ** 2 + y ** 2 < 12 ** 2
     raise SystemExit("end_offsets: unknown shape %s" % name)
 
 
