@@ -544,12 +544,26 @@ typedef struct run_result {
   lsm_pls_stats stats;
 } run_result;
 
-static run_result run_sequence(int threads, int rk3, int reseed, int adjust, int steps) {
+static void direct_stage(void *ctx, const lsm_grid *in, const lsm_grid *target, float c0, float c1,
+                         float dt) {
+  lsm_pls_stage(ctx, in, target, c0, c1, dt);
+}
+
+/* Steps particles against a stand-in grid evolution.  hooked: the stages go
+ * through lsm_pls_stage_hook; edge: the target lies partly outside the grid, so particles
+ * leave the domain. */
+static run_result run_sequence_ex(int threads, int rk3, int reseed, int adjust, int steps,
+                                  int hooked, int edge) {
   const int N = 160;
   lsm_grid *phi = new_grid(N, N, 1.0f, 1.0f), *target = new_grid(N, N, 1.0f, 1.0f);
   lsm_grid *stage = new_grid(N, N, 1.0f, 1.0f);
   fill_disc(phi, 80.3, 79.6, 50.0);
-  fill_disc(target, 74.0, 83.0, 38.0);
+  if (edge)
+    fill_disc(target, 30.0, 83.0, 45.0);
+  else
+    fill_disc(target, 74.0, 83.0, 38.0);
+  void (*stage_fn)(void *, const lsm_grid *, const lsm_grid *, float, float, float) =
+      hooked ? lsm_pls_stage_hook : direct_stage;
   lsm_pls_opts o;
   lsm_pls_opts_default(&o);
   o.threads = threads;
@@ -561,13 +575,13 @@ static run_result run_sequence(int threads, int rk3, int reseed, int adjust, int
     lsm_pls_begin_step(p, rk3 ? 3 : 1);
     if (rk3) {
       /* the particle stages of RK3 against stand-in stage fields */
-      lsm_pls_stage(p, phi, target, 0.0f, 1.0f, dt);
+      stage_fn(p, phi, target, 0.0f, 1.0f, dt);
       lsm_grid_copy(stage, phi);
       fake_step(stage, target, dt, n);
-      lsm_pls_stage(p, stage, target, 0.75f, 0.25f, dt);
-      lsm_pls_stage(p, stage, target, 1.0f / 3.0f, 2.0f / 3.0f, dt);
+      stage_fn(p, stage, target, 0.75f, 0.25f, dt);
+      stage_fn(p, stage, target, 1.0f / 3.0f, 2.0f / 3.0f, dt);
     } else {
-      lsm_pls_stage(p, phi, target, 0.0f, 1.0f, dt);
+      stage_fn(p, phi, target, 0.0f, 1.0f, dt);
     }
     fake_step(phi, target, dt, n);
     correct(p, phi);
@@ -590,6 +604,10 @@ static run_result run_sequence(int threads, int rk3, int reseed, int adjust, int
   lsm_grid_destroy(&target);
   lsm_grid_destroy(&stage);
   return res;
+}
+
+static run_result run_sequence(int threads, int rk3, int reseed, int adjust, int steps) {
+  return run_sequence_ex(threads, rk3, reseed, adjust, steps, 0, 0);
 }
 
 static void free_result(run_result *r) {
@@ -630,6 +648,29 @@ static void test_determinism_threads(void **state) {
   assert_same(&a, &b);
   free_result(&a);
   free_result(&b);
+}
+
+/* Through the stepper's hook (as lsm_morph drives them), particles, phi and
+ * every counter come out exactly as with lsm_pls_stage called directly: Euler
+ * and RK3, with particles leaving the domain, with reseeding and radius
+ * adjustment, on 1 and 2 threads.  (A hook that deferred the last stage into
+ * the correction, fused with the detection, was tried: equal, but 20 % slower,
+ * its two gather chains in series.) */
+static void test_hook_defers_last_stage(void **state) {
+  (void)state;
+  const int cases[][5] = {/* rk3, reseed, adjust, edge, threads */
+                          {0, 0, 0, 0, 1}, {0, 0, 0, 1, 1}, {1, 0, 0, 1, 1},
+                          {1, 4, 1, 1, 2}, {0, 3, 1, 1, 2}};
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; ++c) {
+    const int *q = cases[c];
+    run_result a = run_sequence_ex(q[4], q[0], q[1], q[2], 14, 0, q[3]);
+    run_result b = run_sequence_ex(q[4], q[0], q[1], q[2], 14, 1, q[3]);
+    if (q[3]) assert_true(a.stats.left_domain > 0); /* the exits path is exercised */
+    assert_true(a.stats.escaped_total > 0);
+    assert_same(&a, &b);
+    free_result(&a);
+    free_result(&b);
+  }
 }
 
 /* Reseeding and radius adjustment keep the bookkeeping consistent:
@@ -736,6 +777,7 @@ int main(void) {
       cmocka_unit_test(test_left_domain),
       cmocka_unit_test(test_correction_by_hand),
       cmocka_unit_test(test_determinism_threads),
+      cmocka_unit_test(test_hook_defers_last_stage),
       cmocka_unit_test(test_reseed_and_adjust),
       cmocka_unit_test(test_options_and_edges),
   };
