@@ -656,7 +656,7 @@ static void test_determinism_threads(void **state) {
  * adjustment, on 1 and 2 threads.  (A hook that deferred the last stage into
  * the correction, fused with the detection, was tried: equal, but 20 % slower,
  * its two gather chains in series.) */
-static void test_hook_defers_last_stage(void **state) {
+static void test_hook_equals_direct_stages(void **state) {
   (void)state;
   const int cases[][5] = {/* rk3, reseed, adjust, edge, threads */
                           {0, 0, 0, 0, 1}, {0, 0, 0, 1, 1}, {1, 0, 0, 1, 1},
@@ -777,7 +777,7 @@ int main(void) {
       cmocka_unit_test(test_left_domain),
       cmocka_unit_test(test_correction_by_hand),
       cmocka_unit_test(test_determinism_threads),
-      cmocka_unit_test(test_hook_defers_last_stage),
+      cmocka_unit_test(test_hook_equals_direct_stages),
       cmocka_unit_test(test_reseed_and_adjust),
       cmocka_unit_test(test_options_and_edges),
   };
