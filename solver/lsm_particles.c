@@ -220,6 +220,62 @@ static int attract(const lsm_particles *p, const lsm_grid *phi, size_t k, float 
   return 0;
 }
 
+/* The first attraction step of every particle at once (vectorised): the
+ * same arithmetic as attract's first iteration with lambda = 1.  A particle
+ * whose full step stays in the domain and lands in its band is done (position
+ * and radius stored, state 0); any other gets PCL_RETRY and goes through
+ * attract from its seeded position (which it then repeats exactly). */
+enum { PCL_RETRY = 16u };
+
+/* eval_phi_normal with int offsets on phi's rows, for vectorised loops. */
+PCL_INLINE float phi_normal_int(const float *restrict g, int stride, int nx, int ny, float inv_dx,
+                                float inv_dy, float inv_2dx, float inv_2dy, float x, float y,
+                                float *n_x, float *n_y) {
+  float fx, fy;
+  const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
+  const int c0 = i > 0 ? i - 1 : 0, c3 = i + 2 < nx ? i + 2 : nx - 1;
+  const int r0 = j > 0 ? j - 1 : 0, r3 = j + 2 < ny ? j + 2 : ny - 1;
+  const int o0 = r0 * stride, o1 = j * stride, o2 = o1 + stride, o3 = r3 * stride;
+  const float st[16] = {g[o0 + c0], g[o0 + i], g[o0 + i + 1], g[o0 + c3],
+                        g[o1 + c0], g[o1 + i], g[o1 + i + 1], g[o1 + c3],
+                        g[o2 + c0], g[o2 + i], g[o2 + i + 1], g[o2 + c3],
+                        g[o3 + c0], g[o3 + i], g[o3 + i + 1], g[o3 + c3]};
+  const float wx0 = i + 1 - c0 == 2 ? inv_2dx : inv_dx, wx1 = c3 - i == 2 ? inv_2dx : inv_dx;
+  const float wy0 = j + 1 - r0 == 2 ? inv_2dy : inv_dy, wy1 = r3 - j == 2 ? inv_2dy : inv_dy;
+  return lsm_pcl_phi_normal(st, fx, fy, wx0, wx1, wy0, wy1, n_x, n_y);
+}
+
+PCL_CLONES
+static void attract_first(int n, float *restrict x, float *restrict y, float *restrict x0,
+                          float *restrict y0, float *restrict radius, const int8_t *restrict sign,
+                          uint8_t *restrict state, const lsm_grid *phi, const lsm_particles *p) {
+  const int nx = p->nx, ny = p->ny, stride = (int)phi->stride;
+  const float *restrict g = phi->data;
+  const float inv_dx = p->inv_dx, inv_dy = p->inv_dy, inv_2dx = p->inv_2dx, inv_2dy = p->inv_2dy;
+  const float vmin = p->vmin, vmax = p->vmax, rmin = p->rmin, rmax = p->rmax;
+#pragma omp simd
+  for (int k = 0; k < n; ++k) {
+    float n_x, n_y;
+    const float px = x[k], py = y[k];
+    const float ph0 = phi_normal_int(g, stride, nx, ny, inv_dx, inv_dy, inv_2dx, inv_2dy, px, py,
+                                     &n_x, &n_y);
+    const float step = radius[k] - ph0, lambda = 1.0f; /* radius holds the goal */
+    const float qx = px + lambda * step * n_x * inv_dx;
+    const float qy = py + lambda * step * n_y * inv_dy;
+    const float ph1 = phi_normal_int(g, stride, nx, ny, inv_dx, inv_dy, inv_2dx, inv_2dy, qx, qy,
+                                     &n_x, &n_y);
+    /* in the domain, attract's clamp of (qx, qy) is the identity */
+    const int ok = lsm_pcl_in_domain(qx, qy, nx, ny) & lsm_pcl_in_band(sign[k], ph1, vmin, vmax);
+    const float xs = ok ? qx : px, ys = ok ? qy : py;
+    x[k] = xs;
+    y[k] = ys;
+    x0[k] = xs;
+    y0[k] = ys;
+    radius[k] = ok ? lsm_pcl_radius(sign[k], ph1, rmin, rmax) : radius[k];
+    state[k] = (uint8_t)(ok ? 0 : PCL_RETRY);
+  }
+}
+
 /* Seeds the band of phi into an empty set (generation p->gen). */
 static lsm_status seed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
   p->n = 0;
@@ -264,11 +320,17 @@ static lsm_status seed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
                                     p->rmax);
     return LSM_OK;
   }
-  /* Attraction, per particle. */
+  /* Attraction: the first step of all particles in one vectorised pass,
+   * then the full iteration for those it did not settle. */
   const ptrdiff_t n = (ptrdiff_t)total;
+  const ptrdiff_t chunk = (ptrdiff_t)1 << 30;
+  for (ptrdiff_t k0 = 0; k0 < n; k0 += chunk)
+    attract_first((int)(n - k0 < chunk ? n - k0 : chunk), p->x + k0, p->y + k0, p->x0 + k0,
+                  p->y0 + k0, p->radius + k0, p->sign + k0, p->state + k0, phi, p);
 #pragma omp parallel for num_threads(pls_threads(p, total)) schedule(dynamic, 1024)
   for (ptrdiff_t q = 0; q < n; ++q)
-    p->state[q] = attract(p, phi, (size_t)q, p->radius[q]) ? 0 : PCL_DROP;
+    if (p->state[q] & PCL_RETRY)
+      p->state[q] = attract(p, phi, (size_t)q, p->radius[q]) ? 0 : PCL_DROP;
   p->stats.discarded += (long long)compact(p, PCL_DROP);
   return LSM_OK;
 }
