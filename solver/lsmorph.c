@@ -615,6 +615,9 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   if (st == LSM_OK) st = pick_foreground(src.paths, src.count, &src.read, 1, cli->slice_dir, err);
   const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
   cli->stack.morph.threads = threads;
+  /* loops without their own thread count (distance transforms, previews)
+   * follow --threads too */
+  omp_set_num_threads(threads);
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
   if (st == LSM_OK) {
     cli->stack.morph.backend = backend;
@@ -668,6 +671,9 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     st = pick_foreground(src.paths, src.count, &src.read, cli->quiet, cli->slice_dir, err);
   const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
   cli->stack.morph.threads = threads;
+  /* loops without their own thread count (distance transforms, previews)
+   * follow --threads too */
+  omp_set_num_threads(threads);
   lsm_backend *backend = NULL;
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
   if (st == LSM_OK) {
