@@ -88,6 +88,14 @@ void lsm_grid_copy(lsm_grid *dst, const lsm_grid *src) {
   memcpy(dst->base, src->base, grid_floats(src) * sizeof(float));
 }
 
+void lsm_grid_swap(lsm_grid *a, lsm_grid *b) {
+  float *base = a->base, *data = a->data;
+  a->base = b->base;
+  a->data = b->data;
+  b->base = base;
+  b->data = data;
+}
+
 void lsm_grid_fill(lsm_grid *grid, float value) {
   size_t n = grid_floats(grid);
   for (size_t k = 0; k < n; ++k) grid->base[k] = value;

@@ -54,6 +54,9 @@ void lsm_grid_destroy(lsm_grid **grid);
 /* Same size and spacing as src, contents copied (ghosts included). */
 lsm_status lsm_grid_clone(const lsm_grid *src, lsm_grid **out, lsm_err *err);
 void lsm_grid_copy(lsm_grid *dst, const lsm_grid *src);
+/* Exchanges the contents of two grids of the same size and spacing in O(1)
+ * (their buffers change hands; the grid structs stay where they are). */
+void lsm_grid_swap(lsm_grid *a, lsm_grid *b);
 void lsm_grid_fill(lsm_grid *grid, float value);
 /* Zero-gradient (nearest interior value) extension into the ghost layer. */
 void lsm_grid_fill_ghosts(lsm_grid *grid);

@@ -175,9 +175,10 @@ void lsm_step_hooked(lsm_stepper *st, lsm_scheme scheme, lsm_time time, lsm_grid
                  hook);
     break;
   default:
-    /* phi = phi - dt L(phi): computed into stage1 (in and out must differ). */
+    /* phi = phi - dt L(phi): computed into stage1 (in and out must differ),
+     * whose buffer then becomes phi's (no copy). */
     hooked_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads, hook);
-    lsm_grid_copy(phi, st->stage1);
+    lsm_grid_swap(phi, st->stage1);
     break;
   }
 }
