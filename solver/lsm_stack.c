@@ -941,13 +941,22 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
 
 /* How many gaps to run at once: all cores on separate gaps when one gap's
  * grid is too small to keep them busy (up to 1024^2 pixels), else one gap at
- * a time with the threads inside it (and always one at a time on a device). */
+ * a time with the threads inside it.  On a device backend every gap's morphs
+ * have their own queue, kernels and buffers (one context), so gaps run side
+ * by side there too: the host work of one gap (distance transforms, slopes,
+ * combining, writing) overlaps the device work of the others. */
 static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps) {
   const int threads = o->morph.threads < 1 ? 1 : o->morph.threads;
-  if (threads == 1 || gaps < 2 || (long long)width * height > 1024LL * 1024LL) return 1;
-  /* A device backend shares one context and queue: one gap at a time. */
-  if (o->morph.backend && o->morph.backend->ops != lsm_backend_c_ops()) return 1;
-  return (size_t)threads < gaps ? threads : (int)gaps;
+  const int device = o->morph.backend && o->morph.backend->ops != lsm_backend_c_ops();
+  if (threads == 1 || gaps < 2) return 1;
+  const long long pixels = (long long)width * height;
+  if (!device && pixels > 1024LL * 1024LL) return 1;
+  long long workers = (size_t)threads < gaps ? threads : (long long)gaps;
+  /* each gap in flight holds its working grids on the host: at most about
+   * 2^26 pixels of slices in flight (four 4096^2 gaps, one 8192^2) */
+  const long long cap = pixels > 0 ? (1LL << 26) / pixels : workers;
+  if (device && workers > cap) workers = cap > 1 ? cap : 1;
+  return (int)workers;
 }
 
 /* Per-iteration mode: gap by gap (the slice count of a gap is known only
