@@ -32,6 +32,7 @@ void lsm_morph_opts_default(lsm_morph_opts *opts) {
   opts->particles = 0;
   lsm_pls_opts_default(&opts->pls);
   opts->backend = NULL;
+  opts->stop = NULL;
 }
 
 void lsm_morph_destroy(lsm_morph **morph) {
@@ -187,6 +188,8 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
 lsm_status lsm_morph_advance_to(lsm_morph *m, double t, int max_iter, lsm_err *err) {
   /* A relative slack keeps round-off from adding a vanishing extra step. */
   while (m->time < t * (1.0 - 1e-12) && m->iterations < max_iter) {
+    if (m->opts.stop && *m->opts.stop)
+      return lsm_fail(err, LSM_ERR_INTERRUPTED, NULL, "interrupted at iteration %d", m->iterations);
     const int last = m->time + m->dt >= t * (1.0 - 1e-12) || m->iterations + 1 >= max_iter;
     if (last && !m->opts.track_cp) {
       /* Without per-step tracking, CP is still measured on the step that

@@ -11,6 +11,8 @@
 #ifndef LSM_MORPH_H
 #define LSM_MORPH_H
 
+#include <signal.h>
+
 #include "lsm_backend.h"
 #include "lsm_grid.h"
 #include "lsm_particles.h"
@@ -29,6 +31,10 @@ typedef struct lsm_morph_opts {
   int particles;      /* 1: particle level set correction (Enright et al. 2002) */
   lsm_pls_opts pls;   /* particle options (lsm_pls_opts_default) */
   const lsm_backend *backend; /* where the grid work runs; NULL = the C backend */
+  /* When not NULL: lsm_morph_advance_to stops with LSM_ERR_INTERRUPTED before
+   * any step once *stop is non-zero (a signal handler's flag), so a long gap
+   * does not run to its end after Ctrl-C. */
+  const volatile sig_atomic_t *stop;
 } lsm_morph_opts;
 
 void lsm_morph_opts_default(lsm_morph_opts *opts);

@@ -618,6 +618,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   /* loops without their own thread count (distance transforms, previews)
    * follow --threads too */
   omp_set_num_threads(threads);
+  cli->stack.morph.stop = &stop_signal; /* long gaps stop at the next step */
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
   if (st == LSM_OK) {
     cli->stack.morph.backend = backend;
@@ -674,6 +675,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   /* loops without their own thread count (distance transforms, previews)
    * follow --threads too */
   omp_set_num_threads(threads);
+  cli->stack.morph.stop = &stop_signal; /* long gaps stop at the next step */
   lsm_backend *backend = NULL;
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
   if (st == LSM_OK) {

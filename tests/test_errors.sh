@@ -320,6 +320,41 @@ sum_long=$(fingerprint long-out)
 interrupt INT 130
 interrupt TERM 143
 
+# ---- interruption inside one long gap --------------------------------------------------------
+# One gap of 1024x1024 (a disc into a distant ellipse, RK3, reinitialisation
+# every other step): about 20 s on one thread before its first slice, so a
+# signal after 1 s arrives inside the morph.  The morph checks the flag before
+# every step: the run must end within 5 s of the signal, not at the gap's end.
+"$PY" - <<'PYEOF' || bad "long gap: cannot write its slices"
+import os, struct, zlib
+def png(path, inside):
+    n = 1024
+    raw = b"".join(b"\x00" + bytes(255 if inside(i, j) else 0 for i in range(n)) for j in range(n))
+    def chunk(t, d):
+        return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", n, n, 8, 0, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+os.makedirs("gap", exist_ok=True)
+png("gap/1.png", lambda i, j: (i - 300) ** 2 + (j - 300) ** 2 < 150 ** 2)
+png("gap/2.png", lambda i, j: ((i - 700) / 300) ** 2 + ((j - 650) / 200) ** 2 < 1)
+PYEOF
+"$PY" -c 'import os, signal, sys
+signal.signal(signal.SIGINT, signal.SIG_DFL)
+os.execv(sys.argv[1], sys.argv[1:])' "$LSM" reconstruct gap -o gap-out -q --spacing 2 --no-preview \
+  --threads 1 --time rk3 --reinit-every 2 >/dev/null 2>"$TMP/stderr-gap" &
+pid=$!
+sleep 1
+kill -s INT $pid 2>/dev/null
+t0=$(date +%s)
+wait $pid 2>/dev/null
+rc=$?
+t1=$(date +%s)
+if [ $rc -eq 130 ]; then ok; else bad "long gap: exit $rc, expected 130 ($(cat "$TMP/stderr-gap"))"; fi
+if grep -q -F "interrupted by SIGINT" "$TMP/stderr-gap"; then ok; else bad "long gap: message $(cat "$TMP/stderr-gap")"; fi
+if [ $((t1 - t0)) -le 5 ]; then ok; else bad "long gap: took $((t1 - t0)) s to stop (the morph does not check the signal)"; fi
+if [ -e gap-out ]; then bad "long gap: an output folder was left"; else ok; fi
+
 # ---- a complete run replaces an earlier result as a whole ---------------------------------------------------------------
 "$LSM" reconstruct good -o long-out -q --no-slices >/dev/null 2>"$TMP/stderr"
 rc=$?
