@@ -1019,13 +1019,9 @@ static lsm_status cl_pls_load(void *vs, const lsm_pls_view *set, int radius_adju
   return LSM_OK;
 }
 
-static lsm_status cl_pls_correct(void *vs, lsm_pls_counts *counts, lsm_err *err) {
-  cl_state *s = vs;
-  memset(counts, 0, sizeof *counts);
-  if (s->pn == 0) return LSM_OK;
-  const cl_uint zero = 0;
-  LSM_TRY(fill_uint(s, s->counters, zero, PCL_N_COUNT, err));
-  cl_kernel k = s->k[K_PCL_DETECT];
+/* Arguments 0-9 shared by the detection and radius kernels: the particle
+ * arrays, their count, and phi with its size and row stride. */
+static lsm_status particle_args(cl_state *s, cl_kernel k, lsm_err *err) {
   ARG(k, 0, s->px);
   ARG(k, 1, s->py);
   ARG(k, 2, s->psign);
@@ -1036,6 +1032,17 @@ static lsm_status cl_pls_correct(void *vs, lsm_pls_counts *counts, lsm_err *err)
   ARG(k, 7, s->nx);
   ARG(k, 8, s->ny);
   ARG(k, 9, s->stride);
+  return LSM_OK;
+}
+
+static lsm_status cl_pls_correct(void *vs, lsm_pls_counts *counts, lsm_err *err) {
+  cl_state *s = vs;
+  memset(counts, 0, sizeof *counts);
+  if (s->pn == 0) return LSM_OK;
+  const cl_uint zero = 0;
+  LSM_TRY(fill_uint(s, s->counters, zero, PCL_N_COUNT, err));
+  cl_kernel k = s->k[K_PCL_DETECT];
+  LSM_TRY(particle_args(s, k, err));
   ARG(k, 10, s->dx);
   ARG(k, 11, s->dy);
   ARG(k, 12, s->far);
@@ -1055,16 +1062,7 @@ static lsm_status cl_pls_correct(void *vs, lsm_pls_counts *counts, lsm_err *err)
   LSM_TRY(run_2d(s, k, s->global, s->local, err));
   if (s->radius_adjust) {
     k = s->k[K_PCL_RADIUS];
-    ARG(k, 0, s->px);
-    ARG(k, 1, s->py);
-    ARG(k, 2, s->psign);
-    ARG(k, 3, s->pradius);
-    ARG(k, 4, s->pstate);
-    ARG(k, 5, s->pn);
-    ARG(k, 6, s->phi);
-    ARG(k, 7, s->nx);
-    ARG(k, 8, s->ny);
-    ARG(k, 9, s->stride);
+    LSM_TRY(particle_args(s, k, err));
     ARG(k, 10, s->rmin);
     ARG(k, 11, s->rmax);
     LSM_TRY(run_1d(s, k, (size_t)s->pn, err));

@@ -3,9 +3,8 @@
  * Pure functions of plain values, in the style of kernels/lsm_cell.h: no
  * memory access patterns, no I/O, no globals.  The scalar C path
  * (solver/lsm_particles.c) and the OpenCL kernels (kernels/morph.cl, which
- * the build splices this file into) both include it, so both run the same
- * arithmetic.  The helpers of the last section mirror formulas that
- * solver/lsm_particles.c writes inline; only the OpenCL side calls them.
+ * the build splices this file into) both include it and call the same
+ * functions, so both run the same arithmetic.
  *
  * Units.  Particle positions are in CELL coordinates: x = column, y = row,
  * continuous, with cell centres (grid nodes) at integers.  phi, radii, band
@@ -185,11 +184,10 @@ LSM_FN float lsm_pcl_select(float phi_plus, float phi_minus) {
   return LSM_FABS(phi_plus) <= LSM_FABS(phi_minus) ? phi_plus : phi_minus;
 }
 
-/* ---- Mirrors of inline formulas of solver/lsm_particles.c ----------------------------
- * solver/lsm_particles.c writes these inline (for vectorisation); the OpenCL
- * path (kernels/morph.cl, kernels/lsm_backend_cl.c) calls them instead of
- * copying the formulas.  Each names the C function it mirrors: a change there
- * must be made here too (tests/test_opencl.c compares the two paths). */
+/* ---- Set constants, the node field, stages, strays -----------------------------------
+ * Called by solver/lsm_particles.c (inside its vectorised loops) and by the
+ * OpenCL path (kernels/morph.cl, kernels/lsm_backend_cl.c); each comment names
+ * the C function that uses it. */
 
 /* Constants of a particle set on a dx x dy grid, as lsm_pls_create sets them:
  * r_min = 0.1 min(dx,dy), r_max = 0.5 min(dx,dy); and the stray distance of

@@ -106,25 +106,22 @@ PCL_INLINE float eval_phi(const lsm_particles *p, const lsm_grid *g, float x, fl
  * differences (one-sided at the grid edge, as in lsm_pcl_phi_normal).  One
  * vectorisable pass over the grid; each particle then needs three bilinear
  * interpolations from one 4-node neighbourhood instead of a 4x4 stencil. */
-static void velocity_node(float *v, const float *c, const float *t, const float *dn,
-                          const float *up, int i, int l, int r, float wx, float wy) {
-  v[4 * i + 0] = c[i] - t[i];
-  v[4 * i + 1] = (c[r] - c[l]) * wx;
-  v[4 * i + 2] = (up[i] - dn[i]) * wy;
-}
-
-/* One row of the node field: the interior nodes in a branch-free loop. */
+/* One row j of the node field (lsm_pcl_node_field at every node; branch-free,
+ * so it vectorises). */
 PCL_CLONES
 static void velocity_row(float *restrict v, const float *restrict c, const float *restrict t,
-                         const float *restrict dn, const float *restrict up, int nx,
-                         float inv_2dx, float inv_dx, float wy) {
-  for (int i = 1; i < nx - 1; ++i) {
-    v[4 * i + 0] = c[i] - t[i];
-    v[4 * i + 1] = (c[i + 1] - c[i - 1]) * inv_2dx;
-    v[4 * i + 2] = (up[i] - dn[i]) * wy;
+                         const float *restrict dn, const float *restrict up, int j,
+                         const lsm_particles *p) {
+  const int nx = p->nx, ny = p->ny;
+  const float idx = p->inv_dx, idy = p->inv_dy, i2dx = p->inv_2dx, i2dy = p->inv_2dy;
+  for (int i = 1; i < nx - 1; ++i) /* interior columns: no clamping */
+    lsm_pcl_node_field(i, j, nx, ny, c[i], t[i], c[i - 1], c[i + 1], dn[i], up[i], idx, idy, i2dx,
+                       i2dy, &v[4 * i + 0], &v[4 * i + 1], &v[4 * i + 2]);
+  for (int i = 0; i < nx; i += nx > 1 ? nx - 1 : 1) { /* the two edge columns */
+    const int l = i > 0 ? i - 1 : 0, r = i + 1 < nx ? i + 1 : nx - 1;
+    lsm_pcl_node_field(i, j, nx, ny, c[i], t[i], c[l], c[r], dn[i], up[i], idx, idy, i2dx, i2dy,
+                       &v[4 * i + 0], &v[4 * i + 1], &v[4 * i + 2]);
   }
-  velocity_node(v, c, t, dn, up, 0, 0, nx > 1 ? 1 : 0, inv_dx, wy);
-  if (nx > 1) velocity_node(v, c, t, dn, up, nx - 1, nx - 2, nx - 1, inv_dx, wy);
 }
 
 static void build_velocity(lsm_particles *p, const lsm_grid *in, const lsm_grid *target, int nt) {
@@ -133,8 +130,7 @@ static void build_velocity(lsm_particles *p, const lsm_grid *in, const lsm_grid 
   for (int j = 0; j < ny; ++j) {
     const float *c = &LSM_AT(in, 0, j), *t = &LSM_AT(target, 0, j);
     const float *dn = &LSM_AT(in, 0, j > 0 ? j - 1 : 0), *up = &LSM_AT(in, 0, j + 1 < ny ? j + 1 : ny - 1);
-    const float wy = (j > 0 && j + 1 < ny) ? p->inv_2dy : p->inv_dy;
-    velocity_row(p->velocity + (size_t)j * nx * 4, c, t, dn, up, nx, p->inv_2dx, p->inv_dx, wy);
+    velocity_row(p->velocity + (size_t)j * nx * 4, c, t, dn, up, j, p);
   }
 }
 
@@ -385,8 +381,8 @@ lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_parti
   const float hmin = fminf(p->dx, p->dy), hmax = fmaxf(p->dx, p->dy);
   p->vmin = 0.1f * hmin;
   p->vmax = 3.0f * hmax;
-  p->rmin = 0.1f * hmin;
-  p->rmax = 0.5f * hmin;
+  p->rmin = lsm_pcl_rmin(p->dx, p->dy);
+  p->rmax = lsm_pcl_rmax(p->dx, p->dy);
   p->band = 3.0f * hmax;
   size_t cells;
   /* The particle loops index the node field (4 floats per node) and phi's
@@ -424,27 +420,41 @@ void lsm_pls_begin_step(lsm_particles *p, int stages) {
  * AVX-512 clone at load time, same arithmetic, no FMA contraction in C17).
  * The interpolations' loads stay element by element: GCC's generic tuning
  * emits no gather instructions, and with them (-mtune=icelake-server) the
- * bunny's pls run was 18 % slower on this AMD EPYC.  The displacement dt F N (in cells) at a particle comes from the node
- * field v (F, gx, gy per node), bilinearly interpolated. */
-
-PCL_INLINE void displacement(const float *restrict v, int nx, int ny, float inv_dx,
-                             float inv_dy, float dt, float x, float y, float *ux, float *uy) {
+ * bunny's pls run was 18 % slower on this AMD EPYC.  F and the unit normal N
+ * at a particle come from the node field v (F, gx, gy per node), bilinearly
+ * interpolated; the new position is lsm_pcl_stage_coord, as on OpenCL. */
+PCL_INLINE void sample_velocity(const float *restrict v, int nx, int ny, float x, float y,
+                                float *F, float *n_x, float *n_y) {
   float fx, fy;
   const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
   const int a = (j * nx + i) * 4, b = a + nx * 4;
-  const float F = lsm_pcl_bilinear(v[a], v[a + 4], v[b], v[b + 4], fx, fy);
+  *F = lsm_pcl_bilinear(v[a], v[a + 4], v[b], v[b + 4], fx, fy);
   const float gx = lsm_pcl_bilinear(v[a + 1], v[a + 5], v[b + 1], v[b + 5], fx, fy);
   const float gy = lsm_pcl_bilinear(v[a + 2], v[a + 6], v[b + 2], v[b + 6], fx, fy);
-  const float g = sqrtf(gx * gx + gy * gy);
-  const float inv = 1.0f / (g > 0.0f ? g : 1.0f);
-  const float n_x = g > 0.0f ? gx * inv : LSM_PCL_INV_SQRT2;
-  const float n_y = g > 0.0f ? gy * inv : LSM_PCL_INV_SQRT2;
-  *ux = dt * F * n_x * inv_dx;
-  *uy = dt * F * n_y * inv_dy;
+  lsm_pcl_normal(gx, gy, n_x, n_y);
 }
 
-/* A first stage (c0 = 0, c1 = 1): x += dt F N; with keep_start, the start
- * positions are saved in x0, y0 on the way (for the later stages). */
+/* One particle's stage: x = c0 x0 + c1 (x + dt F N); returns 1 when the new
+ * position left the domain.  A first stage (c0 = 0, c1 = 1) reads no x0, y0;
+ * with keep_start it saves the start position there (for the later stages).
+ * Called with literal first / keep_start, so each loop gets its own body. */
+PCL_INLINE int advect_one(ptrdiff_t k, float *restrict px, float *restrict py,
+                          float *restrict x0, float *restrict y0, int first, int keep_start,
+                          const float *restrict v, int nx, int ny, float inv_dx, float inv_dy,
+                          float c0, float c1, float dt) {
+  const float x = px[k], y = py[k];
+  float F, n_x, n_y;
+  sample_velocity(v, nx, ny, x, y, &F, &n_x, &n_y);
+  const float bx = first ? 0.0f : x0[k], by = first ? 0.0f : y0[k];
+  if (first && keep_start) {
+    x0[k] = x;
+    y0[k] = y;
+  }
+  px[k] = lsm_pcl_stage_coord(c0, bx, c1, x, dt, F, n_x, inv_dx);
+  py[k] = lsm_pcl_stage_coord(c0, by, c1, y, dt, F, n_y, inv_dy);
+  return !lsm_pcl_in_domain(px[k], py[k], nx, ny);
+}
+
 PCL_CLONES
 static int advect_first(ptrdiff_t n, float *restrict px, float *restrict py,
                         float *restrict x0, float *restrict y0, int keep_start,
@@ -453,48 +463,24 @@ static int advect_first(ptrdiff_t n, float *restrict px, float *restrict py,
   int outside = 0;
   if (keep_start) {
 #pragma omp parallel for simd num_threads(nt) schedule(static) reduction(| : outside)
-    for (ptrdiff_t k = 0; k < n; ++k) {
-      const float x = px[k], y = py[k];
-      float ux, uy;
-      displacement(v, nx, ny, inv_dx, inv_dy, dt, x, y, &ux, &uy);
-      x0[k] = x;
-      y0[k] = y;
-      px[k] = x + ux;
-      py[k] = y + uy;
-      outside |= !lsm_pcl_in_domain(px[k], py[k], nx, ny);
-    }
+    for (ptrdiff_t k = 0; k < n; ++k)
+      outside |= advect_one(k, px, py, x0, y0, 1, 1, v, nx, ny, inv_dx, inv_dy, 0.0f, 1.0f, dt);
   } else {
 #pragma omp parallel for simd num_threads(nt) schedule(static) reduction(| : outside)
-    for (ptrdiff_t k = 0; k < n; ++k) {
-      const float x = px[k], y = py[k];
-      float ux, uy;
-      displacement(v, nx, ny, inv_dx, inv_dy, dt, x, y, &ux, &uy);
-      px[k] = x + ux;
-      py[k] = y + uy;
-      outside |= !lsm_pcl_in_domain(px[k], py[k], nx, ny);
-    }
+    for (ptrdiff_t k = 0; k < n; ++k)
+      outside |= advect_one(k, px, py, x0, y0, 1, 0, v, nx, ny, inv_dx, inv_dy, 0.0f, 1.0f, dt);
   }
   return outside;
 }
 
-/* A later stage: x = c0 x0 + c1 (x + dt F N). */
 PCL_CLONES
-static int advect(ptrdiff_t n, float *restrict px, float *restrict py,
-                  const float *restrict x0, const float *restrict y0,
-                  const float *restrict v, int nx, int ny, float inv_dx, float inv_dy,
-                  float c0, float c1, float dt, int nt) {
+static int advect(ptrdiff_t n, float *restrict px, float *restrict py, float *restrict x0,
+                  float *restrict y0, const float *restrict v, int nx, int ny, float inv_dx,
+                  float inv_dy, float c0, float c1, float dt, int nt) {
   int outside = 0;
 #pragma omp parallel for simd num_threads(nt) schedule(static) reduction(| : outside)
-  for (ptrdiff_t k = 0; k < n; ++k) {
-    const float x = px[k], y = py[k];
-    float ux, uy;
-    displacement(v, nx, ny, inv_dx, inv_dy, dt, x, y, &ux, &uy);
-    const float xn = c0 * x0[k] + c1 * (x + ux);
-    const float yn = c0 * y0[k] + c1 * (y + uy);
-    px[k] = xn;
-    py[k] = yn;
-    outside |= !lsm_pcl_in_domain(xn, yn, nx, ny);
-  }
+  for (ptrdiff_t k = 0; k < n; ++k)
+    outside |= advect_one(k, px, py, x0, y0, 0, 0, v, nx, ny, inv_dx, inv_dy, c0, c1, dt);
   return outside;
 }
 
@@ -519,8 +505,8 @@ void lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_tar
     if (!lsm_pcl_in_domain(xn, yn, p->nx, p->ny)) {
       if (!(p->state[k] & PCL_LEFT)) p->left_pending++;
       p->state[k] |= PCL_LEFT;
-      p->x[k] = xn == xn ? clampf(xn, 0.0f, hx) : 0.0f;
-      p->y[k] = yn == yn ? clampf(yn, 0.0f, hy) : 0.0f;
+      p->x[k] = lsm_pcl_clamp_coord(xn, hx);
+      p->y[k] = lsm_pcl_clamp_coord(yn, hy);
     }
   }
 }
@@ -552,7 +538,7 @@ static void detect(int n, const float *restrict px, const float *restrict py,
     /* Escaped by more than `far`: the front has left this particle behind
      * (it no longer marks the interface), and correcting from it would plant
      * a speck of the wrong sign; it is removed instead, as PLS codes do. */
-    const int lost = e && LSM_FABS(ph) > far;
+    const int lost = lsm_pcl_stray(e, ph, far);
     state[k] = (uint8_t)(lost ? PCL_LEFT : (e ? PCL_ESCAPED : 0));
     count += e && !lost;
     stray += lost;
@@ -574,7 +560,7 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
 
   /* 1. detection (parallel, vectorised; each particle writes its own flag) */
   long long strays = 0, found = 0;
-  const float far = 1.5f * (p->dx > p->dy ? p->dx : p->dy);
+  const float far = lsm_pcl_far(p->dx, p->dy);
   const ptrdiff_t chunk = (ptrdiff_t)1 << 30;
   for (ptrdiff_t k0 = 0; k0 < n; k0 += chunk) {
     const int m = (int)(n - k0 < chunk ? n - k0 : chunk);
@@ -660,7 +646,7 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
     for (ptrdiff_t k = 0; k < n; ++k) {
       const int s = p->sign[k];
       const float ph = eval_phi(p, phi, p->x[k], p->y[k]);
-      if ((s > 0 && ph > 0.0f) || (s < 0 && ph < 0.0f))
+      if (lsm_pcl_own_side(s, ph))
         p->radius[k] = lsm_pcl_radius(s, ph, p->rmin, p->rmax);
     }
   }
