@@ -67,7 +67,7 @@ static int pls_threads(const lsm_particles *p, size_t n) {
 #define PCL_INLINE static inline
 #endif
 
-/* Loops that vectorise: GCC function multi-versioning picks the AVX2 clone at
+/* Loops that vectorise: GCC function multi-versioning picks the AVX-512 or AVX2 clone at
  * load time (same arithmetic, no FMA contraction in C17). */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define PCL_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
@@ -75,23 +75,30 @@ static int pls_threads(const lsm_particles *p, size_t n) {
 #define PCL_CLONES
 #endif
 
-/* phi at (x, y) and the unit normal there (interpolated central differences). */
-PCL_INLINE float eval_phi_normal(const lsm_particles *p, const lsm_grid *g, float x, float y,
-                             float *n_x, float *n_y) {
+/* phi at (x, y) and the unit normal there (interpolated central differences,
+ * lsm_pcl_phi_normal on the clamped 4x4 neighbourhood); int offsets on phi's
+ * rows (checked at creation), so it vectorises in attract_first. */
+PCL_INLINE float phi_normal_int(const float *restrict g, int stride, int nx, int ny, float inv_dx,
+                                float inv_dy, float inv_2dx, float inv_2dy, float x, float y,
+                                float *n_x, float *n_y) {
   float fx, fy;
-  int i = lsm_pcl_locate(x, p->nx, &fx), j = lsm_pcl_locate(y, p->ny, &fy);
-  int c[4] = {i > 0 ? i - 1 : 0, i, i + 1, i + 2 < p->nx ? i + 2 : p->nx - 1};
-  int r[4] = {j > 0 ? j - 1 : 0, j, j + 1, j + 2 < p->ny ? j + 2 : p->ny - 1};
-  float s[16];
-  for (int b = 0; b < 4; ++b) {
-    const float *row = &LSM_AT(g, 0, r[b]);
-    for (int a = 0; a < 4; ++a) s[b * 4 + a] = row[c[a]];
-  }
-  float wx0 = c[2] - c[0] == 2 ? p->inv_2dx : p->inv_dx;
-  float wx1 = c[3] - c[1] == 2 ? p->inv_2dx : p->inv_dx;
-  float wy0 = r[2] - r[0] == 2 ? p->inv_2dy : p->inv_dy;
-  float wy1 = r[3] - r[1] == 2 ? p->inv_2dy : p->inv_dy;
-  return lsm_pcl_phi_normal(s, fx, fy, wx0, wx1, wy0, wy1, n_x, n_y);
+  const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
+  const int c0 = i > 0 ? i - 1 : 0, c3 = i + 2 < nx ? i + 2 : nx - 1;
+  const int r0 = j > 0 ? j - 1 : 0, r3 = j + 2 < ny ? j + 2 : ny - 1;
+  const int o0 = r0 * stride, o1 = j * stride, o2 = o1 + stride, o3 = r3 * stride;
+  const float st[16] = {g[o0 + c0], g[o0 + i], g[o0 + i + 1], g[o0 + c3],
+                        g[o1 + c0], g[o1 + i], g[o1 + i + 1], g[o1 + c3],
+                        g[o2 + c0], g[o2 + i], g[o2 + i + 1], g[o2 + c3],
+                        g[o3 + c0], g[o3 + i], g[o3 + i + 1], g[o3 + c3]};
+  const float wx0 = i + 1 - c0 == 2 ? inv_2dx : inv_dx, wx1 = c3 - i == 2 ? inv_2dx : inv_dx;
+  const float wy0 = j + 1 - r0 == 2 ? inv_2dy : inv_dy, wy1 = r3 - j == 2 ? inv_2dy : inv_dy;
+  return lsm_pcl_phi_normal(st, fx, fy, wx0, wx1, wy0, wy1, n_x, n_y);
+}
+
+PCL_INLINE float eval_phi_normal(const lsm_particles *p, const lsm_grid *g, float x, float y,
+                                 float *n_x, float *n_y) {
+  return phi_normal_int(g->data, (int)g->stride, p->nx, p->ny, p->inv_dx, p->inv_dy, p->inv_2dx,
+                        p->inv_2dy, x, y, n_x, n_y);
 }
 
 /* Bilinear value of g at (x, y). */
@@ -222,24 +229,6 @@ static int attract(const lsm_particles *p, const lsm_grid *phi, size_t k, float 
  * and radius stored, state 0); any other gets PCL_RETRY and goes through
  * attract from its seeded position (which it then repeats exactly). */
 enum { PCL_RETRY = 16u };
-
-/* eval_phi_normal with int offsets on phi's rows, for vectorised loops. */
-PCL_INLINE float phi_normal_int(const float *restrict g, int stride, int nx, int ny, float inv_dx,
-                                float inv_dy, float inv_2dx, float inv_2dy, float x, float y,
-                                float *n_x, float *n_y) {
-  float fx, fy;
-  const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
-  const int c0 = i > 0 ? i - 1 : 0, c3 = i + 2 < nx ? i + 2 : nx - 1;
-  const int r0 = j > 0 ? j - 1 : 0, r3 = j + 2 < ny ? j + 2 : ny - 1;
-  const int o0 = r0 * stride, o1 = j * stride, o2 = o1 + stride, o3 = r3 * stride;
-  const float st[16] = {g[o0 + c0], g[o0 + i], g[o0 + i + 1], g[o0 + c3],
-                        g[o1 + c0], g[o1 + i], g[o1 + i + 1], g[o1 + c3],
-                        g[o2 + c0], g[o2 + i], g[o2 + i + 1], g[o2 + c3],
-                        g[o3 + c0], g[o3 + i], g[o3 + i + 1], g[o3 + c3]};
-  const float wx0 = i + 1 - c0 == 2 ? inv_2dx : inv_dx, wx1 = c3 - i == 2 ? inv_2dx : inv_dx;
-  const float wy0 = j + 1 - r0 == 2 ? inv_2dy : inv_dy, wy1 = r3 - j == 2 ? inv_2dy : inv_dy;
-  return lsm_pcl_phi_normal(st, fx, fy, wx0, wx1, wy0, wy1, n_x, n_y);
-}
 
 PCL_CLONES
 static void attract_first(int n, float *restrict x, float *restrict y, float *restrict x0,
