@@ -97,21 +97,13 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
 }
 
 /* Reseeding of a set that runs on the backend, on the host: phi comes down,
- * the host set (emptied) takes reseed_every empty corrections so that its own
- * correction counter reaches its next reseeding, which then seeds the next
- * generation on phi exactly as lsm_pls_correct does on the C path; the new
- * set goes up.  Empty corrections leave phi's interior alone. */
+ * the host set seeds its next generation on it (the same particles as the C
+ * path's reseeding at this step), and the new set goes up. */
 static lsm_status device_reseed(lsm_morph *m, lsm_err *err) {
   LSM_TRY(m->ops->download(m->state, m->phi_host, err));
   const lsm_pls_stats before = *lsm_pls_stats_get(m->pls);
-  const float none_f[1] = {0.0f}; /* no particles (valid pointers all the same) */
-  const int8_t none_s[1] = {1};
-  LSM_TRY(lsm_pls_set(m->pls, 0, none_f, none_f, none_s, none_f, err));
-  for (int q = 0; q < m->opts.pls.reseed_every; ++q)
-    LSM_TRY(lsm_pls_correct(m->pls, m->phi_host, err));
+  LSM_TRY(lsm_pls_reseed(m->pls, m->phi_host, err));
   const lsm_pls_stats *after = lsm_pls_stats_get(m->pls);
-  if (after->reseeds != before.reseeds + 1)
-    return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "particles: the host set did not reseed");
   lsm_pls_stats *q = &m->pls_stats;
   q->reseed_dropped += m->pls_live;
   q->reseeds++;

@@ -643,15 +643,21 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
   p->stats.steps++;
   lsm_status st = LSM_OK;
   /* 5. reseeding (option) */
-  if (p->opts.reseed_every > 0 && p->stats.steps % p->opts.reseed_every == 0) {
-    p->stats.reseed_dropped += (long long)p->n;
-    p->n = 0;
-    p->gen++;
-    p->stats.reseeds++;
-    st = seed(p, phi, err);
-  }
+  if (p->opts.reseed_every > 0 && p->stats.steps % p->opts.reseed_every == 0)
+    st = lsm_pls_reseed(p, phi, err);
   lsm_grid_fill_ghosts(phi);
   return st;
+}
+
+lsm_status lsm_pls_reseed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
+  if (phi->nx != p->nx || phi->ny != p->ny)
+    return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "particles: grid %dx%d, particles seeded on %dx%d",
+                    phi->nx, phi->ny, p->nx, p->ny);
+  p->stats.reseed_dropped += (long long)p->n;
+  p->n = 0;
+  p->gen++;
+  p->stats.reseeds++;
+  return seed(p, phi, err);
 }
 
 const lsm_pls_stats *lsm_pls_stats_get(const lsm_particles *p) { return &p->stats; }

@@ -155,6 +155,13 @@ void lsm_pls_stage_hook(void *ctx, const lsm_grid *in, const lsm_grid *phi_targe
  * the arrays (the set is then left empty, phi is corrected). */
 lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err);
 
+/* Drops every particle and seeds the next generation on phi (the reseeding
+ * lsm_pls_correct does every reseed_every steps; also for a set whose
+ * particles live on a backend).  Counts reseed_dropped and reseeds.
+ * Errors: as lsm_pls_create (LSM_ERR_LIMIT, LSM_ERR_NOMEM), and
+ * LSM_ERR_INTERNAL when phi is not the set's grid size. */
+lsm_status lsm_pls_reseed(lsm_particles *p, const lsm_grid *phi, lsm_err *err);
+
 /* Counters (valid until the set is destroyed). */
 const lsm_pls_stats *lsm_pls_stats_get(const lsm_particles *p);
 
