@@ -103,6 +103,18 @@ static lsm_status check_stop(lsm_err *err) {
   return lsm_fail(err, LSM_ERR_INTERRUPTED, NULL, "interrupted by %s", stop_signal_name(sig));
 }
 
+/* The run-wide settings of a reconstruction: the thread count (--threads, or
+ * all cores), which the loops without their own count (distance transforms,
+ * previews) follow too, and the stop flag that long gaps check at every step.
+ * Returns the thread count. */
+static int setup_run(lsm_cli *cli) {
+  const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
+  cli->stack.morph.threads = threads;
+  omp_set_num_threads(threads);
+  cli->stack.morph.stop = &stop_signal;
+  return threads;
+}
+
 /* A sink that checks for a stop signal before handing each slice to the real one. */
 static lsm_status stoppable_emit(void *ctx, const float *phi, int width, int height, double z,
                                  long input_index, lsm_err *err) {
@@ -613,12 +625,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   }
   if (st == LSM_OK) st = lsm_png_read_size(src.paths[0], &width, &height, err);
   if (st == LSM_OK) st = pick_foreground(src.paths, src.count, &src.read, 1, cli->slice_dir, err);
-  const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
-  cli->stack.morph.threads = threads;
-  /* loops without their own thread count (distance transforms, previews)
-   * follow --threads too */
-  omp_set_num_threads(threads);
-  cli->stack.morph.stop = &stop_signal; /* long gaps stop at the next step */
+  const int threads = setup_run(cli);
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
   if (st == LSM_OK) {
     cli->stack.morph.backend = backend;
@@ -670,12 +677,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   if (st == LSM_OK) st = check_inputs(cli, &src, z, &width, &height, err);
   if (st == LSM_OK)
     st = pick_foreground(src.paths, src.count, &src.read, cli->quiet, cli->slice_dir, err);
-  const int threads = cli->threads > 0 ? cli->threads : omp_get_num_procs();
-  cli->stack.morph.threads = threads;
-  /* loops without their own thread count (distance transforms, previews)
-   * follow --threads too */
-  omp_set_num_threads(threads);
-  cli->stack.morph.stop = &stop_signal; /* long gaps stop at the next step */
+  const int threads = setup_run(cli);
   lsm_backend *backend = NULL;
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
   if (st == LSM_OK) {
