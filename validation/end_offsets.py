@@ -11,12 +11,24 @@ reconstructs, and scores the held-out slices with `lsmorph score`.  It prints
 the scores averaged over the offsets, per shape and method.
 
     /usr/bin/python3 validation/end_offsets.py [BUILD_DIR] [--strides 8,16]
-        [--shapes bunny,ball,ellipsoid,tilted,cylinder,cone] [--methods ls,blend]
+        [--shapes bunny,ball,ellipsoid,tilted,cylinder,cone]
+        [--methods ls,blend,pchip-mirror,pchip-zero,pchip-drop]
         [-- EXTRA LSMORPH OPTIONS]
 
 Shapes: the bunny (../shared/data/bunny, when present) and analytic solids on
 128 x 128 slices, 100 slices tall (also smallball, tube, fork, torus: small,
 slanted and branching structures).  Takes a few minutes.
+
+Methods: lsmorph's (ls, blend, pls) and three references that are not lsmorph:
+a monotone cubic (scipy's PchipInterpolator, Fritsch-Carlson slopes) through
+the plain signed distances of the kept slices (zero level halfway between pixel
+centres, negative inside), read at every slice, inside where it is < 0.  They
+differ only in what an empty kept slice contributes:
+  pchip-mirror  |phi| of the nearest non-empty kept slice (positive everywhere)
+  pchip-zero    0 everywhere
+  pchip-drop    nothing: the spline runs through the non-empty slices only
+                and extrapolates beyond them (kept slices are copied as given)
+These need python3-scipy (`make validate` installs it).
 """
 import json
 import os
@@ -70,25 +82,62 @@ def load(name):
     return solid(name)
 
 
-def run_offset(lsm, truth, k, m, method, extra, work):
+def plain_sdf(mask):
+    """Signed distance of a mask, zero level halfway between pixel centres."""
+    from scipy.ndimage import distance_transform_edt as edt
+    return np.where(mask, 0.5 - edt(mask), edt(~mask) - 0.5)
+
+
+def pchip_reference(stack, k, empty_rule):
+    """The plain monotone-cubic reference (see the module text) for every slice."""
+    from scipy.interpolate import PchipInterpolator
+    zs = list(range(0, len(stack), k))
+    sdfs = [plain_sdf(stack[z]) if stack[z].any() else None for z in zs]
+    full = [j for j, d in enumerate(sdfs) if d is not None]
+    for j, d in enumerate(sdfs):
+        if d is None:
+            near = sdfs[min(full, key=lambda q: abs(q - j))]
+            sdfs[j] = {"mirror": np.abs(near), "zero": np.zeros(near.shape),
+                       "drop": None}[empty_rule]
+    if empty_rule == "drop":
+        zs, sdfs = [zs[j] for j in full], [sdfs[j] for j in full]
+    spline = PchipInterpolator(np.array(zs, float), np.array(sdfs), axis=0, extrapolate=True)
+    result = spline(np.arange(len(stack), dtype=float)) < 0
+    result[::k] = stack[::k]
+    return result
+
+
+def run_offset(lsm, truth, k, m, methods, extra, work):
+    """Scores of every method with m empty slices added below the truth."""
     empty = np.zeros(truth[0].shape, bool)
     stack = [empty] * m + list(truth)
     while (len(stack) - 1) % k or stack[-1].any():
         stack.append(empty)
+    stack = np.array(stack)
     tdir, kdir, odir = (os.path.join(work, d) for d in ("truth", "kept", "out"))
-    for d in (tdir, kdir, odir):
+    for d in (tdir, kdir):
         shutil.rmtree(d, ignore_errors=True)
         os.makedirs(d)
     for i, sl in enumerate(stack):
         vlib.write_mask(os.path.join(tdir, "%04d.png" % (i + 1)), sl)
         if i % k == 0:
             vlib.write_mask(os.path.join(kdir, "%04d.png" % (i + 1)), sl)
-    subprocess.run([lsm, "reconstruct", kdir, "-o", odir, "--spacing", str(k), "--method", method,
-                    "-q", "--no-preview"] + extra, check=True)
-    out = subprocess.run([lsm, "score", tdir, odir, "--stride", str(k)], check=True,
-                         capture_output=True, text=True).stdout
-    j = json.loads(out)
-    return [j["dice_volume"], j["dice"], j["hd95"], j["hd95_pooled"]]
+    scores = {}
+    for method in methods:
+        shutil.rmtree(odir, ignore_errors=True)
+        if method.startswith("pchip-"):
+            os.makedirs(os.path.join(odir, "slices"))
+            for i, sl in enumerate(pchip_reference(stack, k, method[len("pchip-"):])):
+                vlib.write_mask(os.path.join(odir, "slices", "%05d.png" % (i + 1)), sl)
+        else:
+            subprocess.run([lsm, "reconstruct", kdir, "-o", odir, "--spacing", str(k),
+                            "--method", method, "-q", "--no-preview"] + extra, check=True)
+        out = subprocess.run([lsm, "score", tdir, odir, "--stride", str(k)], check=True,
+                             capture_output=True, text=True).stdout
+        j = json.loads(out)
+        scores[method] = [j["dice_volume"], j["dice"], j["hd95"], j["hd95_pooled"],
+                          j["one_sided_empty"]]
+    return scores
 
 
 def main():
@@ -112,8 +161,9 @@ def main():
         os.path.join(build, "lsmorph")
     if not os.access(lsm, os.X_OK):
         raise SystemExit("end_offsets: %s is missing (run make)" % lsm)
-    print("| shape | kept | method | pooled Dice | mean Dice | mean HD95 (px) | pooled HD95 (px) |")
-    print("|---|---|---|---|---|---|---|")
+    print("| shape | kept | method | pooled Dice | mean Dice | mean HD95 (px) | pooled HD95 (px) "
+          "| one side empty |")
+    print("|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="lsm-ends.") as work:
         for shape in opts["--shapes"].split(","):
             truth = load(shape)
@@ -121,11 +171,12 @@ def main():
                 print("| %s | - | - | (missing) | | | |" % shape)
                 continue
             for k in (int(v) for v in opts["--strides"].split(",")):
-                for method in opts["--methods"].split(","):
-                    rows = [run_offset(lsm, truth, k, m, method, extra, work) for m in range(k)]
-                    a = np.nanmean(np.array(rows, float), axis=0)
-                    print("| %s | every %d | %s | %.4f | %.3f | %.2f | %.2f |" % (
-                        shape, k, method, a[0], a[1], a[2], a[3]), flush=True)
+                methods = opts["--methods"].split(",")
+                rows = [run_offset(lsm, truth, k, m, methods, extra, work) for m in range(k)]
+                for method in methods:
+                    a = np.nanmean(np.array([r[method] for r in rows], float), axis=0)
+                    print("| %s | every %d | %s | %.4f | %.3f | %.2f | %.2f | %.1f |" % (
+                        shape, k, method, a[0], a[1], a[2], a[3], a[4]), flush=True)
 
 
 if __name__ == "__main__":
