@@ -17,7 +17,8 @@ the scores averaged over the offsets, per shape and method.
 
 Shapes: the bunny (../shared/data/bunny, when present) and analytic solids on
 128 x 128 slices, 100 slices tall (also smallball, tube, fork, torus: small,
-slanted and branching structures).  Takes a few minutes.
+slanted and branching structures; taper, swim, vee: a narrowing slanted vessel,
+a thin ellipse that moves and turns, two tubes moving apart).  Takes a few minutes.
 
 Methods: lsmorph's (ls, blend, pls) and three references that are not lsmorph:
 a monotone cubic (scipy's PchipInterpolator, Fritsch-Carlson slopes) through
@@ -61,6 +62,14 @@ def solid(name):
         return (np.sqrt(x ** 2 + y ** 2) < 0.9 * (45 - z)) & (z > -45) & (z < 45)
     if name == "smallball":  # a structure a few pixels across
         return x ** 2 + y ** 2 + (z / 4) ** 2 < 7 ** 2
+    if name == "taper":  # a slanted vessel narrowing from 8 to about 1 px radius
+        return (x - 1.2 * z) ** 2 + y ** 2 < np.maximum(4.5 - z / 15, 0) ** 2
+    if name == "swim":  # a thin ellipse moving 1.2 px and turning 0.05 rad per slice
+        c, s = np.cos(0.05 * z), np.sin(0.05 * z)
+        u, v = c * (x - 1.2 * z) + s * y, -s * (x - 1.2 * z) + c * y
+        return (u / 12) ** 2 + (v / 4) ** 2 < 1
+    if name == "vee":  # two thin tubes moving apart, 1 px per slice each (centroid fixed)
+        return ((x - z - 10) ** 2 + y ** 2 < 5 ** 2) | ((x + z + 10) ** 2 + y ** 2 < 5 ** 2)
     if name == "tube":  # a thin vessel crossing the slices at a slant (1.2 px per slice)
         return (x - 1.2 * z) ** 2 + y ** 2 < 5 ** 2
     if name == "fork":  # one tube splitting into two
