@@ -8,29 +8,11 @@ set -u
 BUILD=${1:-build}
 LSM="$BUILD/lsmorph"
 GEN="$BUILD/examples/gen_synthetic"
-pass=0
-fail=0
+SUITE=cli
+. "$(dirname "$0")/harness.sh"
 
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "cli: FAIL: $*"; }
-check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
-  desc=$1
-  shift
-  if "$@"; then ok; else bad "$desc"; fi
-}
-finish() {
-  echo "cli: $pass passed, $fail failed"
-  [ "$fail" -eq 0 ]
-  exit
-}
-
-for f in "$LSM" "$GEN"; do
-  [ -x "$f" ] || { bad "$f is missing (run make first)"; finish; }
-done
-
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-cli.XXXXXX") || exit 1
-trap 'rm -rf "$TMP"' EXIT
-trap 'exit 1' INT TERM
+need "$LSM" "$GEN"
+make_tmp
 
 # file_size FILE: bytes.
 file_size() { wc -c <"$1" | tr -d ' '; }

@@ -12,18 +12,10 @@ set -u
 BUILD=${1:-build}
 LSM="$BUILD/lsmorph"
 PY=${PYTHON:-/usr/bin/python3}
-pass=0
-fail=0
+SUITE=errors
+. "$(dirname "$0")/harness.sh"
 
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "errors: FAIL: $*"; }
-finish() {
-  echo "errors: $pass passed, $fail failed"
-  [ "$fail" -eq 0 ]
-  exit
-}
-
-[ -x "$LSM" ] || { bad "$LSM is missing (run make first)"; finish; }
+need "$LSM"
 command -v "$PY" >/dev/null 2>&1 || PY=python3
 command -v "$PY" >/dev/null 2>&1 || { bad "python3 is needed to make test PNGs"; finish; }
 

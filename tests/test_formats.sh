@@ -20,21 +20,8 @@ BUILD=${1:-build}
 LSM="$BUILD/lsmorph"
 PY=/usr/bin/python3
 HELPER="$(dirname "$0")/formats_check.py"
-pass=0
-fail=0
-
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "formats: FAIL: $*"; }
-check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
-  desc=$1
-  shift
-  if "$@"; then ok; else bad "$desc"; fi
-}
-finish() {
-  echo "formats: $pass passed, $fail failed"
-  [ "$fail" -eq 0 ]
-  exit
-}
+SUITE=formats
+. "$(dirname "$0")/harness.sh"
 # run_checks LOG COMMAND...: runs a formats_check.py check, counts its lines.
 run_checks() {
   log=$1
@@ -52,15 +39,13 @@ run_checks() {
   fi
 }
 
-[ -x "$LSM" ] || { bad "$LSM is missing (run make first)"; finish; }
+need "$LSM"
 [ -x "$PY" ] || { bad "$PY is missing (Debian package python3)"; finish; }
 "$PY" -c 'import vtk, numpy' 2>/dev/null || { bad "$PY cannot import vtk and numpy (Debian packages python3-vtk9, python3-numpy)"; finish; }
 command -v oiiotool >/dev/null 2>&1 && command -v iinfo >/dev/null 2>&1 ||
   { bad "oiiotool / iinfo are missing (Debian package openimageio-tools)"; finish; }
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-formats.XXXXXX") || exit 1
-trap 'rm -rf "$TMP"' EXIT
-trap 'exit 1' INT TERM
+make_tmp
 
 # ---- the ball, every 8th slice, every format, the mesh -------------------------------------
 R=40

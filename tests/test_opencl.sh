@@ -17,29 +17,11 @@ GEN="$BUILD/examples/gen_synthetic"
 PY=/usr/bin/python3
 BUNNY=../shared/data/bunny
 TOL=1e-3
-pass=0
-fail=0
+SUITE=opencl
+. "$(dirname "$0")/harness.sh"
 
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "opencl: FAIL: $*"; }
-check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
-  desc=$1
-  shift
-  if "$@"; then ok; else bad "$desc"; fi
-}
-finish() {
-  echo "opencl: $pass passed, $fail failed"
-  [ "$fail" -eq 0 ]
-  exit
-}
-
-for f in "$LSM" "$GEN"; do
-  [ -x "$f" ] || { bad "$f is missing (run make first)"; finish; }
-done
-
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-opencl.XXXXXX") || exit 1
-trap 'rm -rf "$TMP"' EXIT
-trap 'exit 1' INT TERM
+need "$LSM" "$GEN"
+make_tmp
 # The kernel cache of these runs lives and dies with the temporary folder;
 # PoCL's own cache (also under XDG_CACHE_HOME) stays where it was.
 if [ -z "${POCL_CACHE_DIR:-}" ]; then
