@@ -129,16 +129,7 @@ def main():
         for k in STRIDES:
             ls = metrics[(solid, k, "ls")]
             for other in [m for m in METHODS if m != "ls"]:
-                o = metrics[(solid, k, other)]
-                worse = []
-                if ls["dice_volume"] < o["dice_volume"] - 1e-4:
-                    worse.append("Dice vol. %.4f vs %.4f" % (ls["dice_volume"], o["dice_volume"]))
-                same = ls["one_sided_empty"] == o["one_sided_empty"]  # same slices averaged
-                if same and ls["hd95"] > o["hd95"] + 0.01:
-                    worse.append("HD95 %.2f vs %.2f px" % (ls["hd95"], o["hd95"]))
-                if ls["one_sided_empty"] > o["one_sided_empty"]:
-                    worse.append("%d vs %d slices with one side empty" % (
-                        ls["one_sided_empty"], o["one_sided_empty"]))
+                worse = vlib.where_worse(ls, metrics[(solid, k, other)])
                 if worse:
                     losses.append("%s K=%d vs %s: %s" % (solid, k, other, ", ".join(worse)))
                 else:

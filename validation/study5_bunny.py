@@ -109,18 +109,7 @@ def main():
         for name in names:
             if name == ls_name:
                 continue
-            o = metrics[(k, name)]
-            worse = []
-            if ls["dice_volume"] < o["dice_volume"] - 1e-4:
-                worse.append("Dice vol. %.4f vs %.4f" % (ls["dice_volume"], o["dice_volume"]))
-            same = ls["one_sided_empty"] == o["one_sided_empty"]  # same slices averaged
-            if same and ls["hd95"] > o["hd95"] + 0.01:
-                worse.append("HD95 %.2f vs %.2f px" % (ls["hd95"], o["hd95"]))
-            if same and ls["mean_surface"] > o["mean_surface"] + 0.01:
-                worse.append("MSD %.2f vs %.2f px" % (ls["mean_surface"], o["mean_surface"]))
-            if ls["one_sided_empty"] > o["one_sided_empty"]:
-                worse.append("%d vs %d slices with one side empty" % (
-                    ls["one_sided_empty"], o["one_sided_empty"]))
+            worse = vlib.where_worse(ls, metrics[(k, name)], msd=True)
             if worse:
                 notes.append("K = %d, vs %s: %s" % (k, name, ", ".join(worse)))
     s.md("**Where %s (the default) loses** (worse by more than 1e-4 in pooled Dice or 0.01 "

@@ -401,6 +401,25 @@ def describe_options(options):
     return ", ".join("%s %s" % (k, options[k]) for k in keys if k in options)
 
 
+def where_worse(ls, other, msd=False):
+    """How the scores `ls` lose to `other` (lists of phrases; empty: nowhere):
+    pooled Dice lower by more than 1e-4, mean HD95 (and with msd the mean
+    surface distance) higher by more than 0.01 px when both average the same
+    slices, or more slices with one side empty."""
+    worse = []
+    if ls["dice_volume"] < other["dice_volume"] - 1e-4:
+        worse.append("Dice vol. %.4f vs %.4f" % (ls["dice_volume"], other["dice_volume"]))
+    same = ls["one_sided_empty"] == other["one_sided_empty"]  # same slices averaged
+    if same and ls["hd95"] > other["hd95"] + 0.01:
+        worse.append("HD95 %.2f vs %.2f px" % (ls["hd95"], other["hd95"]))
+    if msd and same and ls["mean_surface"] > other["mean_surface"] + 0.01:
+        worse.append("MSD %.2f vs %.2f px" % (ls["mean_surface"], other["mean_surface"]))
+    if ls["one_sided_empty"] > other["one_sided_empty"]:
+        worse.append("%d vs %d slices with one side empty" % (
+            ls["one_sided_empty"], other["one_sided_empty"]))
+    return worse
+
+
 def vanished_slices(rows, stride):
     """Held-out slices that are empty in the result although the truth there and
     both kept slices around them are non-empty."""
