@@ -216,6 +216,7 @@ static lsm_align resolve_align(lsm_align align, const slice *a, const slice *b, 
 static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp interp, int width,
                         int height, double pixel) {
   memset(f, 0, sizeof *f);
+  const lsm_align asked = align;
   align = resolve_align(align, w->s[1], w->s[2], width, height);
   f->width = width;
   f->height = height;
@@ -225,12 +226,34 @@ static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp i
     const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
     for (int k = 0; k < 4; ++k) {
       const slice *sk = w->s[k];
-      if (k == 1 && a->empty) sk = b; /* an empty end does not move */
+      if (k == 1 && a->empty) sk = b; /* an empty end sits with the full one (but see below) */
       if (k == 2 && b->empty) sk = a;
       if (!sk || !sk->loaded || sk->empty) continue;
       f->dx[k] = (int)lround(sk->cx - cx);
       f->dy[k] = (int)lround(sk->cy - cy);
     }
+  }
+  /* A gap where the object ends (one side empty), cubic profile: if the pair
+   * beyond the full slice is aligned, the end keeps moving at that pair's
+   * centroid velocity (a straight continuation of the centroid path), so an
+   * oblique vessel or a drifting part ends where it was heading rather than
+   * where it was last seen; its shape is then compared with the slice beyond
+   * in that pair's frame.  (linear sees only the pair: the end stays put.) */
+  const int ke = a->empty ? 1 : 2, kf = 3 - ke, kn = a->empty ? 3 : 0;
+  if (interp == LSM_INTERP_CUBIC && a->empty != b->empty && asked != LSM_ALIGN_NONE &&
+      window_usable(w, kn) &&
+      resolve_align(asked, w->s[kn], w->s[kf], width, height) == LSM_ALIGN_HULL) {
+    const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
+    const slice *sf = w->s[kf], *sn = w->s[kn];
+    const double vx = (sf->cx - sn->cx) / (w->z[kf] - w->z[kn]);
+    const double vy = (sf->cy - sn->cy) / (w->z[kf] - w->z[kn]);
+    const double he = w->z[ke] - w->z[kf];
+    f->dx[kn] = (int)lround(sn->cx - cx);
+    f->dy[kn] = (int)lround(sn->cy - cy);
+    f->dx[kf] = (int)lround(sf->cx - cx);
+    f->dy[kf] = (int)lround(sf->cy - cy);
+    f->dx[ke] = (int)lround(sf->cx - cx + he * vx);
+    f->dy[ke] = (int)lround(sf->cy - cy + he * vy);
   }
   /* Slopes of the centroid path: secant (linear), or PCHIP through the
    * neighbouring slices' centroids (cubic). */
@@ -505,63 +528,112 @@ static double cap_depth(lsm_method method, double R, double sigma) {
   return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
 }
 
-/* A gap with exactly one empty side.
- * Linear profile: the non-empty slice's phi raised by the cap depth; for a
- * signed distance phi, phi + e is the exact level-set solution of a uniform
- * inward motion by e (its zero set is the erosion by e).
- * Cubic profile: per pixel, the monotone cubic through the slice beyond the
- * non-empty one (when there is one), the non-empty slice, and a virtual slice
- * phi + R at the empty one (R the slice's largest depth: the deepest point
- * would reach zero there), so the end continues the trend of the slices above
- * it (C1 at the non-empty slice: a shape that is not shrinking stays full
- * longer, a shrinking one keeps shrinking); the object is cut off at mid-gap
- * (sigma >= 1/2 is empty), so the halfway rule holds either way.  At mid-gap a
- * steady shape is eroded by about R/2 before the cut.  phi + R was chosen over
- * phi + 2R (a cap closing exactly at mid-gap) on synthetic stacks with the
- * object's ends at every offset within a gap (ball, ellipsoids, cylinder,
- * cone, bunny; every 8th and 16th slice): pooled Dice higher on all of them,
- * e.g. ball every 16th 0.9782 -> 0.9807, cylinder 0.9373 -> 0.9441. */
+/* Cells of a grid inside the object (phi <= 0, as the outputs count them). */
+static size_t inside_count(const lsm_grid *phi) {
+  size_t count = 0;
+  for (int j = 0; j < phi->ny; ++j)
+    for (int i = 0; i < phi->nx; ++i) count += LSM_AT(phi, i, j) <= 0.0f;
+  return count;
+}
+
+static int compare_float(const void *x, const void *y) {
+  const float a = *(const float *)x, b = *(const float *)y;
+  return (a > b) - (a < b);
+}
+
+/* Raises work uniformly (an erosion, exact for a signed distance) just enough
+ * that at most `target` cells stay inside: past the value of the (target+1)-th
+ * deepest cell (cells tied with it leave too).  scratch holds nx * ny floats. */
+static void erode_to_area(lsm_grid *work, size_t target, float *scratch) {
+  size_t count = 0;
+  for (int j = 0; j < work->ny; ++j)
+    for (int i = 0; i < work->nx; ++i)
+      if (LSM_AT(work, i, j) <= 0.0f) scratch[count++] = LSM_AT(work, i, j);
+  if (count <= target) return;
+  qsort(scratch, count, sizeof *scratch, compare_float);
+  const float e = 1e-4f * work->dx - scratch[target];
+  for (int j = 0; j < work->ny; ++j)
+    for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) += e;
+}
+
+/* A gap with exactly one empty side: the object ends at mid-gap (the halfway
+ * rule; sigma >= 1/2 is empty).  Between the non-empty slice F and mid-gap it
+ * is F eroded; phi + e is the exact level-set solution of a uniform inward
+ * motion by e, so no PDE is needed.
+ * Linear profile: a uniform erosion by cap_depth (only the pair is seen).
+ * Cubic profile: the end continues what the slices above it were doing.
+ *   - Shape: per cell, phi_F + sigma H max(m, 0), m = (phi_F - phi_N) / h_N the
+ *     z-slope of phi from the slice N beyond F (in that pair's frame, which
+ *     also keeps moving: frame_setup).  This is the slope the spline on the
+ *     other side of F ends with, so the surface is C1 across F wherever the
+ *     shape shrinks toward its end; where it grows toward the end it is held
+ *     at F (nothing grows past the last slice).
+ *   - Area: cross-sections near the tip of a smooth surface shrink linearly in
+ *     area (a paraboloid), so the area is capped by the line through the areas
+ *     of N and F, A(sigma) = A_F - sigma H (A_N - A_F) / h_N when the object
+ *     narrows toward its end (A_F otherwise), and by A_F (1 - 2 sigma), a
+ *     paraboloid closing at mid-gap, when there is no slice beyond F; the shape
+ *     is eroded uniformly to meet the cap.
+ *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap, a
+ *   rounded one closes along its own paraboloid.  Chosen over the previous rule
+ *   (the monotone cubic through N, F and a virtual slice phi_F + R at the empty
+ *   one, R the largest depth, with the end held in place) with
+ *   validation/end_offsets.py, which places the object's ends at every offset
+ *   inside a gap: over 13 shapes at strides 4, 8 and 16 the mean per-slice
+ *   Dice goes from 0.905 to 0.917 and the mean HD95 from 1.24 to 1.12 px on
+ *   average; pooled Dice rises in 33 of the 39 cases (ball every 16th 0.9807 ->
+ *   0.9817, cylinder 0.9441 -> 0.9517, slanted tube 0.8826 -> 0.9355) and falls
+ *   for a 7 px ball (0.9399 -> 0.9372) and a torus (0.9204 -> 0.9183) every
+ *   16th, where the area line through slices 16 apart overestimates a strongly
+ *   curved end, and by <= 0.0015 for two diverging tubes. */
 static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty,
                               const double *zs, const double *fs, size_t n, lsm_pair_stats *ps,
                               lsm_err *err) {
   const lsm_stack_opts *o = r->opts;
   const lsm_grid *full = a_empty ? g->phi_b : g->phi_a;
   const int kn = a_empty ? 3 : 0, kf = a_empty ? 2 : 1; /* beyond, and the full slice */
-  lsm_grid *work = NULL, *slope = NULL;
+  lsm_grid *work = NULL, *slope = NULL, *nb = NULL;
+  float *scratch = NULL;
   LSM_TRY(lsm_grid_clone(full, &work, err));
   const double R = fmax(-(double)lsm_grid_min(full), 0.5 * full->dx);
-  const float H = (float)g->f.H, d_gap = (float)(R / g->f.H);
-  lsm_status st = LSM_OK;
+  const double H = g->f.H;
   const int cubic = o->interp == LSM_INTERP_CUBIC;
+  const double area_f = (double)inside_count(full);
+  double area_rate = -2.0 * area_f / H; /* dA/dz toward the end; no slice beyond F */
+  lsm_status st = LSM_OK;
   if (cubic) {
-    /* slope of phi per unit height, moving from the full slice toward the empty one */
+    const size_t cells = (size_t)full->nx * (size_t)full->ny;
     st = lsm_grid_clone(full, &slope, err);
-    lsm_grid *nb = NULL;
-    if (st == LSM_OK && window_usable(w, kn)) {
+    if (st == LSM_OK && !(scratch = lsm_alloc(cells, sizeof *scratch, err, "cap cells")))
+      st = err ? err->status : LSM_ERR_NOMEM;
+    const int beyond = window_usable(w, kn);
+    if (st == LSM_OK && beyond) {
       st = lsm_grid_clone(full, &nb, err);
       if (st == LSM_OK)
         st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn], nb, err);
     }
     if (st == LSM_OK) {
-      const float hn = nb ? (float)fabs(w->z[kn] - w->z[kf]) : 1.0f;
+      const float hn = beyond ? (float)fabs(w->z[kn] - w->z[kf]) : 1.0f;
       for (int j = 0; j < slope->ny; ++j)
         for (int i = 0; i < slope->nx; ++i)
-          LSM_AT(slope, i, j) =
-              nb ? pchip_slope(hn, H, (LSM_AT(full, i, j) - LSM_AT(nb, i, j)) / hn, d_gap) : d_gap;
+          LSM_AT(slope, i, j) = beyond ? fmaxf((LSM_AT(full, i, j) - LSM_AT(nb, i, j)) / hn, 0.0f) : 0.0f;
+      if (beyond) area_rate = fmin((area_f - (double)inside_count(nb)) / hn, 0.0);
     }
     lsm_grid_destroy(&nb);
   }
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
     const double sigma = a_empty ? 1.0 - fs[k] : fs[k];
     if (cubic) {
-      double h00, h10, h01, h11;
-      hermite_basis(sigma, &h00, &h10, &h01, &h11);
-      /* phi(sigma) = h00 phi + h10 H m + h01 (phi + R) + h11 H d_gap, with h00 + h01 = 1 */
-      const float c_up = (float)(h01 * R + h11 * H * d_gap), c_m = (float)(h10 * H);
-      const float floor_value = sigma >= 0.5 ? 1e-3f * full->dx : -INFINITY;
+      const float rise = (float)(sigma * H);
       for (int j = 0; j < work->ny; ++j)
         for (int i = 0; i < work->nx; ++i)
-          LSM_AT(work, i, j) = fmaxf(LSM_AT(full, i, j) + c_up + c_m * LSM_AT(slope, i, j), floor_value);
+          LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(slope, i, j);
+      const double area = sigma >= 0.5 ? 0.0 : fmax(area_f + sigma * H * area_rate, 0.0);
+      erode_to_area(work, (size_t)floor(area), scratch);
+      if (sigma >= 0.5) /* past the end: outside, the field stays continuous */
+        for (int j = 0; j < work->ny; ++j)
+          for (int i = 0; i < work->nx; ++i)
+            LSM_AT(work, i, j) = fmaxf(LSM_AT(work, i, j), 1e-3f * full->dx);
     } else {
       const float e = (float)cap_depth(o->method, R, sigma);
       for (int j = 0; j < work->ny; ++j)
@@ -571,6 +643,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
     st = emit(r, zs[k], -1, err);
     ps->slices++;
   }
+  free(scratch);
   lsm_grid_destroy(&slope);
   lsm_grid_destroy(&work);
   return st;

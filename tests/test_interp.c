@@ -346,6 +346,86 @@ static void test_component_halfway(void **state) {
   }
 }
 
+/* Cells inside (phi <= 0) of output slice q, and their centroid x. */
+static size_t slice_inside(const record *rec, size_t q, double *centroid_x) {
+  const size_t cells = (size_t)rec->w * rec->h;
+  size_t inside = 0;
+  double sx = 0.0;
+  for (size_t c = 0; c < cells; ++c)
+    if (rec->phi[q * cells + c] <= 0.0f) {
+      inside++;
+      sx += (double)(c % (size_t)rec->w);
+    }
+  if (centroid_x) *centroid_x = inside ? sx / (double)inside : -1.0;
+  return inside;
+}
+
+/* The output slice at height z (dz = 1 here, so heights are whole). */
+static size_t slice_at(const record *rec, double z) {
+  for (size_t q = 0; q < rec->count; ++q)
+    if (fabs(rec->z[q] - z) < 1e-9) return q;
+  fail_msg("no output slice at z = %g", z);
+  return 0;
+}
+
+/* Where the object ends (default options, cubic): an empty slice at z = 0,
+ * the last non-empty one F at z = 8, the slice N beyond it at z = 16.
+ *   flat end (F = N): F's section, whole, up to mid-gap, nothing from there on;
+ *   paraboloid end (areas of N and F on a line that reaches 0 at z = 4): the
+ *     area at z = 6 at most the line's, A_F / 2, and not far below it;
+ *   no slice beyond F: the same paraboloid, closing at mid-gap;
+ *   moving end (N and F do not overlap): the section keeps moving at the
+ *     centroid velocity of N -> F, 2 px per unit z. */
+static void test_object_ends(void **state) {
+  (void)state;
+  const double z[3] = {0.0, 8.0, 16.0};
+  const double r_flat[3] = {0.0, 20.0, 20.0};
+  const double r_para[3] = {0.0, 10.0, sqrt(300.0)};
+  const double r_moving[3] = {0.0, 8.0, 8.0}, cx_moving[3] = {0.0, 40.0, 56.0};
+  struct {
+    const char *name;
+    const double *radius, *cx;
+    size_t slices;
+  } cases[] = {{"flat", r_flat, NULL, 3},
+               {"paraboloid", r_para, NULL, 3},
+               {"no slice beyond", r_flat, NULL, 2},
+               {"moving", r_moving, cx_moving, 3}};
+  for (size_t t = 0; t < sizeof cases / sizeof cases[0]; ++t) {
+    disc_source src = {96, cases[t].radius, cases[t].cx};
+    lsm_stack_opts o;
+    lsm_stack_opts_default(&o);
+    o.dz = 1.0;
+    record rec = {0};
+    run_stack(&src, z, cases[t].slices, &o, &rec);
+    const size_t area_f = slice_inside(&rec, slice_at(&rec, 8.0), NULL);
+    /* the halfway rule: nothing at or beyond mid-gap */
+    for (double zz = 1.0; zz <= 4.0; zz += 1.0)
+      assert_int_equal(slice_inside(&rec, slice_at(&rec, zz), NULL), 0);
+    double cx6 = 0.0;
+    const size_t area5 = slice_inside(&rec, slice_at(&rec, 5.0), NULL);
+    const size_t area6 = slice_inside(&rec, slice_at(&rec, 6.0), &cx6);
+    const size_t area7 = slice_inside(&rec, slice_at(&rec, 7.0), NULL);
+    print_message("end %s: area at z = 8, 7, 6, 5: %zu %zu %zu %zu, centroid x at 6: %.2f\n",
+                  cases[t].name, area_f, area7, area6, area5, cx6);
+    if (t == 0 || t == 3) { /* not narrowing: whole up to mid-gap */
+      assert_int_equal(area5, area_f);
+      assert_int_equal(area6, area_f);
+      assert_int_equal(area7, area_f);
+    } else { /* at most the line through the areas of N and F (or, with no N,
+              * the line from F to 0 at mid-gap), and not far below it */
+      const double a_n =
+          cases[t].slices == 3 ? (double)slice_inside(&rec, slice_at(&rec, 16.0), NULL) : 3.0 * area_f;
+      for (double zz = 5.0; zz <= 7.0; zz += 1.0) {
+        const double line = area_f - (8.0 - zz) * (a_n - area_f) / 8.0;
+        const size_t a = slice_inside(&rec, slice_at(&rec, zz), NULL);
+        assert_true((double)a <= line && (double)a >= 0.85 * line - 4.0);
+      }
+    }
+    if (t == 3) assert_true(fabs(cx6 - 36.0) <= 0.5); /* 40 - 2 px per unit z * 2 */
+    record_free(&rec);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cubic_monotone),
@@ -354,6 +434,7 @@ int main(void) {
       cmocka_unit_test(test_stride_one),
       cmocka_unit_test(test_per_iteration_empty_identical),
       cmocka_unit_test(test_component_halfway),
+      cmocka_unit_test(test_object_ends),
   };
   return cmocka_run_group_tests_name("interp", tests, NULL, NULL);
 }
