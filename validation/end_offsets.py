@@ -18,7 +18,8 @@ the scores averaged over the offsets, per shape and method.
 Shapes: the bunny (../shared/data/bunny, when present) and analytic solids on
 128 x 128 slices, 100 slices tall (also smallball, tube, fork, torus: small,
 slanted and branching structures; taper, swim, vee: a narrowing slanted vessel,
-a thin ellipse that moves and turns, two tubes moving apart).  Takes a few minutes.
+a thin ellipse that moves and turns, two tubes moving apart; branch: a straight
+tube with a side branch leaving it, whose centroid drifts though the trunk stays).  Takes a few minutes.
 
 Methods: lsmorph's (ls, blend, pls) and three references that are not lsmorph:
 a monotone cubic (scipy's PchipInterpolator, Fritsch-Carlson slopes) through
@@ -70,6 +71,10 @@ def solid(name):
         return (u / 12) ** 2 + (v / 4) ** 2 < 1
     if name == "vee":  # two thin tubes moving apart, 1 px per slice each (centroid fixed)
         return ((x - z - 10) ** 2 + y ** 2 < 5 ** 2) | ((x + z + 10) ** 2 + y ** 2 < 5 ** 2)
+    if name == "branch":  # a straight 10 px tube with a 6 px side branch leaving it at 1 px per slice
+        trunk = x ** 2 + y ** 2 < 10 ** 2
+        side = ((x - 6 - np.maximum(z, 0)) ** 2 + y ** 2 < 6 ** 2) & (z > -10)
+        return (trunk | side) & (abs(z) < 45)
     if name == "tube":  # a thin vessel crossing the slices at a slant (1.2 px per slice)
         return (x - 1.2 * z) ** 2 + y ** 2 < 5 ** 2
     if name == "fork":  # one tube splitting into two
