@@ -252,8 +252,10 @@ static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp i
     f->dy[kn] = (int)lround(sn->cy - cy);
     f->dx[kf] = (int)lround(sf->cx - cx);
     f->dy[kf] = (int)lround(sf->cy - cy);
-    f->dx[ke] = (int)lround(sf->cx - cx + he * vx);
-    f->dy[ke] = (int)lround(sf->cy - cy + he * vy);
+    /* the extrapolated centroid stays on the image, which also keeps the
+     * working canvas within its documented bound (--max-pixels) */
+    f->dx[ke] = (int)lround(fmin(fmax(sf->cx + he * vx, 0.0), width - 1.0) - cx);
+    f->dy[ke] = (int)lround(fmin(fmax(sf->cy + he * vy, 0.0), height - 1.0) - cy);
   }
   /* Slopes of the centroid path: secant (linear), or PCHIP through the
    * neighbouring slices' centroids (cubic). */
@@ -567,7 +569,11 @@ static void erode_to_area(lsm_grid *work, size_t target, float *scratch) {
  *     also keeps moving: frame_setup).  This is the slope the spline on the
  *     other side of F ends with, so the surface is C1 across F wherever the
  *     shape shrinks toward its end; where it grows toward the end it is held
- *     at F (nothing grows past the last slice).
+ *     at F (nothing grows past the last slice).  The trend is carried at most
+ *     h_N past F (no farther than it was measured): with uneven heights a
+ *     slope taken over a short step, a pixel of alignment rounding included,
+ *     would otherwise be multiplied by a long gap.  With even spacing
+ *     (sigma H <= H/2 < h_N) this changes nothing.
  *   - Area: cross-sections near the tip of a smooth surface shrink linearly in
  *     area (a paraboloid), so the area is capped by the line through the areas
  *     of N and F, A(sigma) = A_F - sigma H (A_N - A_F) / h_N when the object
@@ -600,6 +606,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
   const int cubic = o->interp == LSM_INTERP_CUBIC;
   const double area_f = (double)inside_count(full);
   double area_rate = -2.0 * area_f / H; /* dA/dz toward the end; no slice beyond F */
+  double trend_reach = H;               /* how far the per-cell trend is carried */
   lsm_status st = LSM_OK;
   if (cubic) {
     const size_t cells = (size_t)full->nx * (size_t)full->ny;
@@ -614,6 +621,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
     }
     if (st == LSM_OK) {
       const float hn = beyond ? (float)fabs(w->z[kn] - w->z[kf]) : 1.0f;
+      trend_reach = hn;
       for (int j = 0; j < slope->ny; ++j)
         for (int i = 0; i < slope->nx; ++i)
           LSM_AT(slope, i, j) = beyond ? fmaxf((LSM_AT(full, i, j) - LSM_AT(nb, i, j)) / hn, 0.0f) : 0.0f;
@@ -624,7 +632,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
     const double sigma = a_empty ? 1.0 - fs[k] : fs[k];
     if (cubic) {
-      const float rise = (float)(sigma * H);
+      const float rise = (float)fmin(sigma * H, trend_reach);
       for (int j = 0; j < work->ny; ++j)
         for (int i = 0; i < work->nx; ++i)
           LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(slope, i, j);

@@ -424,6 +424,26 @@ static void test_object_ends(void **state) {
     if (t == 3) assert_true(fabs(cx6 - 36.0) <= 0.5); /* 40 - 2 px per unit z * 2 */
     record_free(&rec);
   }
+  /* Uneven gaps: N -> F moves 16 px in 1 unit, the end gap is 400 units long.
+   * The extrapolated end stops at the image border (x = 0) instead of 6400 px
+   * away, so the canvas stays bounded; at a quarter of the gap the centroid
+   * is a quarter of the way from 40 to 0; the shape trend measured over 1
+   * unit is not multiplied by 100. */
+  const double z_long[3] = {0.0, 400.0, 401.0};
+  disc_source src = {96, r_moving, cx_moving};
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  o.dz = 1.0;
+  record rec = {0};
+  run_stack(&src, z_long, 3, &o, &rec);
+  double cx300 = 0.0;
+  const size_t area300 = slice_inside(&rec, slice_at(&rec, 300.0), &cx300);
+  print_message("end moving, long gap: area at z = 300: %zu, centroid x %.2f\n", area300, cx300);
+  /* whole, but for the pixel by which the whole-pixel shifts of N and F
+   * disagree (centroids 8.5 and -7.5 px from the centre, rounded apart) */
+  assert_true((double)area300 >= 0.9 * (double)slice_inside(&rec, slice_at(&rec, 400.0), NULL));
+  assert_true(fabs(cx300 - 30.0) <= 0.5);
+  record_free(&rec);
 }
 
 int main(void) {
