@@ -547,13 +547,20 @@ static int compare_float(const void *x, const void *y) {
  * that at most `target` cells stay inside: past the value of the (target+1)-th
  * deepest cell (cells tied with it leave too).  scratch holds nx * ny floats. */
 static void erode_to_area(lsm_grid *work, size_t target, float *scratch) {
-  size_t count = 0;
-  for (int j = 0; j < work->ny; ++j)
-    for (int i = 0; i < work->nx; ++i)
-      if (LSM_AT(work, i, j) <= 0.0f) scratch[count++] = LSM_AT(work, i, j);
-  if (count <= target) return;
-  qsort(scratch, count, sizeof *scratch, compare_float);
-  const float e = 1e-4f * work->dx - scratch[target];
+  float deepest_left; /* the deepest of the cells that must leave */
+  if (target == 0) {  /* only the deepest cell matters: no sort */
+    deepest_left = lsm_grid_min(work);
+    if (deepest_left > 0.0f) return;
+  } else {
+    size_t count = 0;
+    for (int j = 0; j < work->ny; ++j)
+      for (int i = 0; i < work->nx; ++i)
+        if (LSM_AT(work, i, j) <= 0.0f) scratch[count++] = LSM_AT(work, i, j);
+    if (count <= target) return;
+    qsort(scratch, count, sizeof *scratch, compare_float);
+    deepest_left = scratch[target];
+  }
+  const float e = 1e-4f * work->dx - deepest_left;
   for (int j = 0; j < work->ny; ++j)
     for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) += e;
 }
@@ -604,7 +611,7 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
   const double R = fmax(-(double)lsm_grid_min(full), 0.5 * full->dx);
   const double H = g->f.H;
   const int cubic = o->interp == LSM_INTERP_CUBIC;
-  const double area_f = (double)inside_count(full);
+  const double area_f = cubic ? (double)inside_count(full) : 0.0;
   double area_rate = -2.0 * area_f / H; /* dA/dz toward the end; no slice beyond F */
   double trend_reach = H;               /* how far the per-cell trend is carried */
   lsm_status st = LSM_OK;
