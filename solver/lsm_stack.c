@@ -8,6 +8,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "lsm_register.h"
 #include "lsm_sdf.h"
 
 /* ---- names ------------------------------------------------------------------------ */
@@ -179,45 +180,41 @@ typedef struct frame {
   float clamp;           /* |phi| written out is at most this */
 } frame;
 
-/* Pixels of a that are inside b once a is moved by (dx, dy). */
-static size_t overlap(const lsm_mask *a, const lsm_mask *b, int dx, int dy) {
-  size_t count = 0;
-  for (int y = 0; y < a->height; ++y) {
-    const int yb = y + dy;
-    if (yb < 0 || yb >= b->height) continue;
-    const uint8_t *pa = a->pixels + (size_t)y * a->width, *pb = b->pixels + (size_t)yb * b->width;
-    for (int x = 0; x < a->width; ++x) {
-      const int xb = x + dx;
-      if (xb >= 0 && xb < b->width) count += pa[x] && pb[xb];
-    }
-  }
-  return count;
-}
-
-/* --align auto: hull alignment for this pair only when the two shapes overlap
- * little in place (intersection over union below 1/2: the morph alone would
- * shrink one and grow the other rather than move it) and moving A by the
- * centroid difference makes them overlap more. */
-static lsm_align resolve_align(lsm_align align, const slice *a, const slice *b, int width,
-                               int height) {
-  if (align != LSM_ALIGN_AUTO) return align;
-  if (a->empty || b->empty) return LSM_ALIGN_NONE;
+/* --align auto: hull alignment for this pair only when the shape has moved.
+ * Two tests: the shapes overlap little in place (intersection over union
+ * below 1/2: the morph alone would shrink one and grow the other rather than
+ * move it), and the translation of largest overlap (lsm_register) lies nearer
+ * the centroid difference than no shift at all, and moving by the centroid
+ * difference does overlap more.  A centroid can move while the shape stays: a
+ * part grows out on one side (ears above a head) or shrinks away; then the
+ * best translation stays near zero and the pair is morphed in place. */
+static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b, int width,
+                                int height, lsm_align *align, lsm_err *err) {
+  *align = asked;
+  if (asked != LSM_ALIGN_AUTO) return LSM_OK;
+  *align = LSM_ALIGN_NONE;
+  if (a->empty || b->empty) return LSM_OK;
   const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
   const int dx = (int)lround(b->cx - cx) - (int)lround(a->cx - cx);
   const int dy = (int)lround(b->cy - cy) - (int)lround(a->cy - cy);
-  if (dx == 0 && dy == 0) return LSM_ALIGN_NONE;
-  const size_t in_place = overlap(&a->filled, &b->filled, 0, 0);
+  if (dx == 0 && dy == 0) return LSM_OK;
+  const size_t in_place = lsm_mask_overlap(&a->filled, &b->filled, 0, 0);
   const size_t area = lsm_mask_count(&a->filled) + lsm_mask_count(&b->filled);
   const double iou = (double)in_place / (double)(area - in_place);
-  if (iou >= 0.5) return LSM_ALIGN_NONE;
-  return overlap(&a->filled, &b->filled, dx, dy) > in_place ? LSM_ALIGN_HULL : LSM_ALIGN_NONE;
+  if (iou >= 0.5) return LSM_OK;
+  if (lsm_mask_overlap(&a->filled, &b->filled, dx, dy) <= in_place) return LSM_OK;
+  int tx, ty;
+  LSM_TRY(lsm_register_shift(&a->filled, &b->filled, &tx, &ty, err));
+  const long to_centroid = (long)(tx - dx) * (tx - dx) + (long)(ty - dy) * (ty - dy);
+  if (to_centroid < (long)tx * tx + (long)ty * ty) *align = LSM_ALIGN_HULL;
+  return LSM_OK;
 }
 
-static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp interp, int width,
-                        int height, double pixel) {
+static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_interp interp,
+                              int width, int height, double pixel, lsm_err *err) {
   memset(f, 0, sizeof *f);
-  const lsm_align asked = align;
-  align = resolve_align(align, w->s[1], w->s[2], width, height);
+  lsm_align align, end_align = LSM_ALIGN_NONE;
+  LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, &align, err));
   f->width = width;
   f->height = height;
   f->H = w->z[2] - w->z[1];
@@ -241,8 +238,9 @@ static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp i
    * in that pair's frame.  (linear sees only the pair: the end stays put.) */
   const int ke = a->empty ? 1 : 2, kf = 3 - ke, kn = a->empty ? 3 : 0;
   if (interp == LSM_INTERP_CUBIC && a->empty != b->empty && asked != LSM_ALIGN_NONE &&
-      window_usable(w, kn) &&
-      resolve_align(asked, w->s[kn], w->s[kf], width, height) == LSM_ALIGN_HULL) {
+      window_usable(w, kn))
+    LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, &end_align, err));
+  if (end_align == LSM_ALIGN_HULL) {
     const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
     const slice *sf = w->s[kf], *sn = w->s[kn];
     const double vx = (sf->cx - sn->cx) / (w->z[kf] - w->z[kn]);
@@ -282,6 +280,7 @@ static void frame_setup(frame *f, const window *w, lsm_align align, lsm_interp i
   f->pad = mx + 2;
   f->pad_y = my + 2;
   f->clamp = (float)(pixel * hypot((double)width, (double)height));
+  return LSM_OK;
 }
 
 /* The alignment shift at fraction s: the Hermite curve through the shifts of
@@ -338,7 +337,8 @@ static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double 
   LSM_TRY(slice_phi(s, r->opts->input, 0, 0, r->image_phi, err));
   frame f;
   window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}};
-  frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height, r->opts->pixel_size);
+  LSM_TRY(frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height,
+                      r->opts->pixel_size, err));
   f.pad = 0;
   f.pad_y = 0;
   frame_extract(&f, r->image_phi, 0.0, r->out);
@@ -466,7 +466,7 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   memset(g, 0, sizeof *g);
   const lsm_stack_opts *o = r->opts;
   const slice *a = w->s[1], *b = w->s[2];
-  frame_setup(&g->f, w, o->align, o->interp, r->width, r->height, o->pixel_size);
+  LSM_TRY(frame_setup(&g->f, w, o->align, o->interp, r->width, r->height, o->pixel_size, err));
   const int nx = r->width + 2 * g->f.pad, ny = r->height + 2 * g->f.pad_y;
   const float h = (float)o->pixel_size;
   lsm_status st = lsm_grid_create(nx, ny, h, h, &g->phi_a, err);

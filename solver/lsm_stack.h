@@ -16,10 +16,12 @@
  * s is shifted back by (1 - s) d_A + s d_B (bilinear resampling of phi), so
  * centroids travel on the straight segment between the two slices' (or on the
  * monotone cubic through the neighbouring slices' centroids, --interp cubic).
- * Auto alignment (the default) applies this to a pair only when shifting the
- * source by the centroid difference makes it overlap the target more: a pair
- * whose shape moved is aligned, a pair whose shape changed (a branch or an ear
- * appearing moves the centroid without moving the object) is not.
+ * Auto alignment (the default) applies this to a pair only when its shape
+ * moved: the two overlap little in place (IoU < 1/2), shifting the source by
+ * the centroid difference makes it overlap the target more, and the
+ * translation of largest overlap (lsm_register) lies nearer the centroid
+ * difference than no shift.  A pair whose shape changed (a branch or an ear
+ * growing out moves the centroid without moving the object) is not aligned.
  *
  * Empty slices: the object is absent there.  Next to a non-empty slice A the
  * object shrinks to nothing at mid-gap: the empty side gets the constant
@@ -56,7 +58,7 @@ typedef enum lsm_align {
   LSM_ALIGN_UNKNOWN = -1,
   LSM_ALIGN_HULL, /* convex-hull centroid to the image centre */
   LSM_ALIGN_NONE,
-  LSM_ALIGN_AUTO, /* hull for a pair only when the shift increases its overlap */
+  LSM_ALIGN_AUTO, /* hull for a pair only when its shape moved (see above) */
   LSM_ALIGN_COUNT
 } lsm_align;
 

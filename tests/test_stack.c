@@ -562,6 +562,37 @@ static void test_align(void **state) {
   sink_free(&r.sink);
 }
 
+/* --align auto when a part grows out of a shape that stays: a disc (r = 12)
+ * becomes a bar (9 px wide) reaching from it to the right edge.  The hull
+ * centroid moves ~35 px right and moving the disc by that much would overlap
+ * the bar more than in place (so a centroid-only rule would align), but the
+ * translation of largest overlap is only ~8 px (the disc just inside the bar):
+ * nothing moved, and auto must morph in place, exactly as --align none. */
+static void test_align_auto_growth(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(20, C, 12)}}, {2, {disc(20, C, 4), rect(16, 46, 95, 54, 0)}}};
+  const double z[2] = {0, 6};
+  lsm_stack_opts o;
+  run by_mode[3];
+  const lsm_align modes[3] = {LSM_ALIGN_AUTO, LSM_ALIGN_NONE, LSM_ALIGN_HULL};
+  for (int m = 0; m < 3; ++m) {
+    default_opts(&o);
+    o.align = modes[m];
+    assert_int_equal(run_stack(&by_mode[m], W, H, 0, defs, z, 2, &o), LSM_OK);
+    assert_int_equal(by_mode[m].sink.n, 7);
+  }
+  size_t differ_auto = 0, differ_hull = 0;
+  for (size_t k = 1; k < 6; ++k)
+    for (int p = 0; p < W * H; ++p) {
+      differ_auto += by_mode[0].sink.s[k].phi[p] != by_mode[1].sink.s[k].phi[p];
+      differ_hull += by_mode[2].sink.s[k].phi[p] != by_mode[1].sink.s[k].phi[p];
+    }
+  print_message("growth: cells differing from none: auto %zu, hull %zu\n", differ_auto, differ_hull);
+  assert_int_equal(differ_auto, 0);
+  assert_true(differ_hull > 0);
+  for (int m = 0; m < 3; ++m) sink_free(&by_mode[m].sink);
+}
+
 /* ------------------------------------------------------------------------ */
 /* outline input, nested contours                                            */
 
@@ -729,6 +760,7 @@ int main(void) {
       cmocka_unit_test(test_merge_split),
       cmocka_unit_test(test_vanish_appear),
       cmocka_unit_test(test_align),
+      cmocka_unit_test(test_align_auto_growth),
       cmocka_unit_test(test_outline_ring),
       cmocka_unit_test(test_outline_vase),
       cmocka_unit_test(test_per_iteration),
