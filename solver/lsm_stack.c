@@ -8,6 +8,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "lsm_parts.h"
 #include "lsm_register.h"
 #include "lsm_sdf.h"
 
@@ -117,24 +118,30 @@ static lsm_status slice_load(const lsm_slice_source *src, size_t index, int widt
   return LSM_OK;
 }
 
-/* phi of a slice placed on phi's canvas with its pixel (0,0) at cell (ox, oy). */
-static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
-                            lsm_err *err) {
+/* phi of a mask (or outline) placed on phi's canvas with its pixel (0,0) at
+ * cell (ox, oy). */
+static lsm_status mask_phi(const lsm_mask *m, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
+                           lsm_err *err) {
   lsm_mask canvas;
   LSM_TRY(lsm_mask_create(phi->nx, phi->ny, &canvas, err));
-  for (int y = 0; y < s->raw.height; ++y) {
+  for (int y = 0; y < m->height; ++y) {
     int cy = y + oy;
     if (cy < 0 || cy >= canvas.height) continue;
-    for (int x = 0; x < s->raw.width; ++x) {
+    for (int x = 0; x < m->width; ++x) {
       int cx = x + ox;
       if (cx < 0 || cx >= canvas.width) continue;
-      canvas.pixels[(size_t)cy * canvas.width + cx] = s->raw.pixels[(size_t)y * s->raw.width + x];
+      canvas.pixels[(size_t)cy * canvas.width + cx] = m->pixels[(size_t)y * m->width + x];
     }
   }
   lsm_status st = input == LSM_INPUT_OUTLINE ? lsm_sdf_from_outline(&canvas, phi, err)
                                              : lsm_sdf_from_mask(&canvas, phi, err);
   lsm_mask_free(&canvas);
   return st;
+}
+
+static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
+                            lsm_err *err) {
+  return mask_phi(&s->raw, input, ox, oy, phi, err);
 }
 
 /* ---- monotone cubic (PCHIP) ------------------------------------------------------------- */
@@ -178,6 +185,7 @@ typedef struct frame {
   double H;              /* height of the gap, z_B - z_A */
   double mx[2], my[2];   /* slopes of the shift path at A and B, per unit z */
   float clamp;           /* |phi| written out is at most this */
+  int aligned;           /* the pair is aligned (hull, asked or chosen by auto) */
 } frame;
 
 /* --align auto: hull alignment for this pair only when the shape has moved.
@@ -217,6 +225,7 @@ static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_in
   LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, &align, err));
   f->width = width;
   f->height = height;
+  f->aligned = align == LSM_ALIGN_HULL;
   f->H = w->z[2] - w->z[1];
   const slice *a = w->s[1], *b = w->s[2];
   if (align == LSM_ALIGN_HULL && !(a->empty && b->empty)) {
@@ -352,6 +361,14 @@ typedef struct gap {
   frame f;
   lsm_grid *phi_a, *phi_b;
   lsm_grid *slope_a, *slope_b;
+  /* parts that moved (lsm_parts): each pair's phi on a window of the image
+   * around the part (origin part_x, part_y), and the shift from A's part to
+   * B's; phi_a and phi_b then hold the rest */
+  int parts;
+  lsm_grid *part_a[LSM_PARTS_MAX], *part_b[LSM_PARTS_MAX];
+  int part_ax[LSM_PARTS_MAX], part_ay[LSM_PARTS_MAX], part_bx[LSM_PARTS_MAX], part_by[LSM_PARTS_MAX];
+  double part_dx[LSM_PARTS_MAX], part_dy[LSM_PARTS_MAX];
+  int rest_empty; /* every part of both slices moved: the rest is empty */
 } gap;
 
 static void gap_free(gap *g) {
@@ -359,6 +376,120 @@ static void gap_free(gap *g) {
   lsm_grid_destroy(&g->phi_b);
   lsm_grid_destroy(&g->slope_a);
   lsm_grid_destroy(&g->slope_b);
+  for (int k = 0; k < g->parts; ++k) {
+    lsm_grid_destroy(&g->part_a[k]);
+    lsm_grid_destroy(&g->part_b[k]);
+  }
+  g->parts = 0;
+}
+
+/* Margin, in pixels, of the window around a moving part where its phi is
+ * kept; farther out the output keeps the rest's phi (the zero level is
+ * exact, |phi| there may exceed the distance to the part). */
+#define LSM_PART_MARGIN 16
+
+/* phi of one part on the window around it (bounding box + margin, within
+ * the image); *ox, *oy: the window's origin on the image. */
+static lsm_status part_phi(const lsm_mask *part, float h, lsm_grid **phi, int *ox, int *oy,
+                           lsm_err *err) {
+  int x0 = part->width, y0 = part->height, x1 = -1, y1 = -1;
+  for (int y = 0; y < part->height; ++y)
+    for (int x = 0; x < part->width; ++x)
+      if (part->pixels[(size_t)y * part->width + x]) {
+        if (x < x0) x0 = x;
+        if (x > x1) x1 = x;
+        if (y < y0) y0 = y;
+        if (y > y1) y1 = y;
+      }
+  x0 = x0 - LSM_PART_MARGIN < 0 ? 0 : x0 - LSM_PART_MARGIN;
+  y0 = y0 - LSM_PART_MARGIN < 0 ? 0 : y0 - LSM_PART_MARGIN;
+  x1 = x1 + LSM_PART_MARGIN >= part->width ? part->width - 1 : x1 + LSM_PART_MARGIN;
+  y1 = y1 + LSM_PART_MARGIN >= part->height ? part->height - 1 : y1 + LSM_PART_MARGIN;
+  *ox = x0;
+  *oy = y0;
+  LSM_TRY(lsm_grid_create(x1 - x0 + 1, y1 - y0 + 1, h, h, phi, err));
+  return mask_phi(part, LSM_INPUT_MASK, -x0, -y0, *phi, err);
+}
+
+/* Parts that moved (see lsm_parts.h): for an unaligned pair of two non-empty
+ * mask slices, each pair of parts found is taken out of phi_A and phi_B and
+ * moved on its own: at fraction s its phi is the blend of A's part moved by
+ * s d and B's part moved back by (1 - s) d, so it travels the straight line
+ * between the two centres instead of vanishing and growing again beside.
+ * Unless both slices have nothing else left, the rest must keep something on
+ * each side (else nothing moves: the halfway rule handles a side with
+ * nothing). */
+static lsm_status gap_parts(stack_run *r, const window *w, gap *g, lsm_err *err) {
+  const slice *a = w->s[1], *b = w->s[2];
+  lsm_part_move mv[LSM_PARTS_MAX];
+  int count = 0;
+  LSM_TRY(lsm_parts_moved(&a->filled, &b->filled, mv, &count, err));
+  if (count == 0) return LSM_OK;
+  lsm_mask rest_a = {0, 0, NULL}, rest_b = {0, 0, NULL};
+  lsm_status st = lsm_mask_create(r->width, r->height, &rest_a, err);
+  if (st == LSM_OK) st = lsm_mask_create(r->width, r->height, &rest_b, err);
+  size_t left_a = 0, left_b = 0;
+  if (st == LSM_OK) {
+    const size_t cells = (size_t)r->width * (size_t)r->height;
+    for (size_t p = 0; p < cells; ++p) {
+      uint8_t in_a = a->filled.pixels[p], in_b = b->filled.pixels[p];
+      for (int k = 0; k < count; ++k) {
+        in_a &= (uint8_t)!mv[k].part_a.pixels[p];
+        in_b &= (uint8_t)!mv[k].part_b.pixels[p];
+      }
+      rest_a.pixels[p] = in_a;
+      rest_b.pixels[p] = in_b;
+      left_a += in_a;
+      left_b += in_b;
+    }
+  }
+  const int usable = st == LSM_OK && (left_a > 0) == (left_b > 0);
+  const float h = (float)r->opts->pixel_size;
+  for (int k = 0; usable && st == LSM_OK && k < count; ++k) {
+    g->parts = k + 1;
+    g->part_dx[k] = mv[k].dx;
+    g->part_dy[k] = mv[k].dy;
+    st = part_phi(&mv[k].part_a, h, &g->part_a[k], &g->part_ax[k], &g->part_ay[k], err);
+    if (st == LSM_OK)
+      st = part_phi(&mv[k].part_b, h, &g->part_b[k], &g->part_bx[k], &g->part_by[k], err);
+  }
+  if (usable && st == LSM_OK) {
+    g->rest_empty = left_a == 0;
+    st = mask_phi(&rest_a, LSM_INPUT_MASK, g->f.pad, g->f.pad_y, g->phi_a, err);
+    if (st == LSM_OK) st = mask_phi(&rest_b, LSM_INPUT_MASK, g->f.pad, g->f.pad_y, g->phi_b, err);
+  }
+  lsm_mask_free(&rest_a);
+  lsm_mask_free(&rest_b);
+  for (int k = 0; k < count; ++k) lsm_part_move_free(&mv[k]);
+  return st;
+}
+
+/* Adds the moving parts to an output slice at fraction s (union: min), over
+ * the two parts' windows as moved to s. */
+static void gap_paste_parts(const gap *g, double s, float *out) {
+  const frame *f = &g->f;
+  for (int k = 0; k < g->parts; ++k) {
+    const lsm_grid *pa = g->part_a[k], *pb = g->part_b[k];
+    /* A's window moved forward by s d, B's back by (1 - s) d */
+    const double ax = g->part_ax[k] + s * g->part_dx[k], ay = g->part_ay[k] + s * g->part_dy[k];
+    const double bx = g->part_bx[k] - (1.0 - s) * g->part_dx[k];
+    const double by = g->part_by[k] - (1.0 - s) * g->part_dy[k];
+    int x0 = (int)floor(fmin(ax, bx)), y0 = (int)floor(fmin(ay, by));
+    int x1 = (int)ceil(fmax(ax + pa->nx - 1, bx + pb->nx - 1));
+    int y1 = (int)ceil(fmax(ay + pa->ny - 1, by + pb->ny - 1));
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 > f->width - 1) x1 = f->width - 1;
+    if (y1 > f->height - 1) y1 = f->height - 1;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        float v = (float)((1.0 - s) * lsm_grid_sample(pa, x - ax, y - ay) +
+                          s * lsm_grid_sample(pb, x - bx, y - by));
+        if (v > f->clamp) v = f->clamp;
+        float *o = &out[(size_t)y * f->width + x];
+        if (v < *o) *o = v;
+      }
+  }
 }
 
 /* Per-pixel PCHIP slopes at A and B.  A missing or empty neighbour leaves the
@@ -473,7 +604,10 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   if (st == LSM_OK) st = lsm_grid_create(nx, ny, h, h, &g->phi_b, err);
   if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad_y - g->f.dy[1], g->phi_a, err);
   if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad_y - g->f.dy[2], g->phi_b, err);
-  if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND) {
+  if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
+      o->input == LSM_INPUT_MASK && !o->per_iteration && !g->f.aligned)
+    st = gap_parts(r, w, g, err);
+  if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND && !g->rest_empty) {
     /* (blend stays the classic baseline, without this rule)
      * both directions see the original sets: A's components against B's
      * inside, then B's against A's (lowering phi_b inside A's unmatched
@@ -481,7 +615,8 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
     st = cap_unmatched(g->phi_a, g->phi_b, err);
     if (st == LSM_OK) st = cap_unmatched(g->phi_b, g->phi_a, err);
   }
-  if (st == LSM_OK && o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration)
+  if (st == LSM_OK && o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration &&
+      !g->rest_empty)
     st = gap_slopes(r, w, g, err);
   if (st != LSM_OK) {
     gap_free(g);
@@ -762,6 +897,7 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
     }
     gap_add_cubic(g, fs[k], mix);
     frame_extract(&g->f, mix, fs[k], r->out);
+    gap_paste_parts(g, fs[k], r->out);
     solver += now_seconds() - t0;
     st = emit(r, zs[k], -1, err);
     t0 = now_seconds();
@@ -793,10 +929,11 @@ static lsm_status run_gap_regular(stack_run *r, const window *w, const double *z
   LSM_TRY(gap_setup(r, w, &g, err));
   lsm_status st = LSM_OK;
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
-  if (a->empty && b->empty) {
+  if ((a->empty && b->empty) || g.rest_empty) {
     lsm_grid_fill(g.phi_a, g.f.clamp);
     for (size_t k = 0; st == LSM_OK && k < n; ++k) {
       frame_extract(&g.f, g.phi_a, fs[k], r->out);
+      gap_paste_parts(&g, fs[k], r->out);
       st = emit(r, zs[k], -1, err);
       ps->slices++;
     }

@@ -23,6 +23,12 @@
  * difference than no shift.  A pair whose shape changed (a branch or an ear
  * growing out moves the centroid without moving the object) is not aligned.
  *
+ * Moving parts (ls and pls, mask input, unaligned pairs): components that
+ * moved off their place by the next slice, paired by lsm_parts, are taken
+ * out of the morph; each pair travels the straight line between its centres
+ * as the blend of its two parts moved to the same place, joined to the rest
+ * by the minimum.
+ *
  * Empty slices: the object is absent there.  Next to a non-empty slice A the
  * object shrinks to nothing at mid-gap: the empty side gets the constant
  * target phi = c, with c chosen so that the deepest point of A (depth R)

@@ -1,25 +1,11 @@
 /* Tests for solver/lsm_register.c: mask overlap under a shift, and the
  * coarse-to-fine translation of largest overlap against brute force. */
-#include "tests/lsm_test.h"
+#include "tests/lsm_test_mask.h"
 
 #include "solver/lsm_grid.h"
 #include "solver/lsm_register.h"
 #include "solver/lsm_status.h"
 
-static lsm_mask new_mask(int w, int h) {
-  lsm_mask m;
-  lsm_err err;
-  lsm_err_clear(&err);
-  assert_int_equal(lsm_mask_create(w, h, &m, &err), LSM_OK);
-  return m;
-}
-
-static void paint_disc(lsm_mask *m, double cx, double cy, double r) {
-  for (int y = 0; y < m->height; ++y)
-    for (int x = 0; x < m->width; ++x)
-      if ((x - cx) * (x - cx) + (y - cy) * (y - cy) <= r * r)
-        m->pixels[(size_t)y * (size_t)m->width + (size_t)x] = 1;
-}
 
 static void paint_rect(lsm_mask *m, int x0, int y0, int x1, int y1) {
   for (int y = y0; y <= y1; ++y)
@@ -46,7 +32,7 @@ static void paint_blob(lsm_mask *m, uint64_t *seed, double cx, double cy, double
     const double ox = ((double)(lsm_test_rand(seed) % 1000) / 1000.0 - 0.5) * size;
     const double oy = ((double)(lsm_test_rand(seed) % 1000) / 1000.0 - 0.5) * size;
     const double r = (0.15 + 0.25 * (double)(lsm_test_rand(seed) % 1000) / 1000.0) * size;
-    paint_disc(m, cx + ox, cy + oy, r);
+    lsm_test_paint_disc(m, cx + ox, cy + oy, r);
   }
 }
 
@@ -59,7 +45,7 @@ static void register_ok(const lsm_mask *a, const lsm_mask *b, int *dx, int *dy) 
 static void test_overlap_matches_definition(void **state) {
   (void)state;
   uint64_t seed = 7;
-  lsm_mask a = new_mask(37, 23), b = new_mask(37, 23);
+  lsm_mask a = lsm_test_mask(37, 23), b = lsm_test_mask(37, 23);
   paint_blob(&a, &seed, 15, 11, 14);
   paint_blob(&b, &seed, 22, 12, 14);
   for (int dy = -25; dy <= 25; dy += 3)
@@ -75,7 +61,7 @@ static void test_small_is_exhaustive(void **state) {
   (void)state;
   uint64_t seed = 99;
   for (int trial = 0; trial < 40; ++trial) {
-    lsm_mask a = new_mask(48, 40), b = new_mask(48, 40);
+    lsm_mask a = lsm_test_mask(48, 40), b = lsm_test_mask(48, 40);
     paint_blob(&a, &seed, 20, 18, 10);
     paint_blob(&b, &seed, 26, 20, 10);
     int dx, dy;
@@ -103,7 +89,7 @@ static void test_known_shift(void **state) {
   for (int k = 0; k < 3; ++k) {
     const int n = sizes[k];
     uint64_t seed = 1234 + (uint64_t)k;
-    lsm_mask a = new_mask(n, n), b = new_mask(n, n);
+    lsm_mask a = lsm_test_mask(n, n), b = lsm_test_mask(n, n);
     const double size = 0.3 * n;
     const int sx = (int)(0.31 * n), sy = -(int)(0.17 * n);
     paint_blob(&a, &seed, 0.35 * n, 0.6 * n, size);
@@ -132,9 +118,9 @@ static void test_known_shift(void **state) {
  * px of bar). */
 static void test_growth_is_not_motion(void **state) {
   (void)state;
-  lsm_mask a = new_mask(200, 120), b = new_mask(200, 120);
-  paint_disc(&a, 50, 60, 20);
-  paint_disc(&b, 50, 60, 16);
+  lsm_mask a = lsm_test_mask(200, 120), b = lsm_test_mask(200, 120);
+  lsm_test_paint_disc(&a, 50, 60, 20);
+  lsm_test_paint_disc(&b, 50, 60, 16);
   paint_rect(&b, 50, 58, 190, 62);
   int dx, dy;
   register_ok(&a, &b, &dx, &dy);
@@ -146,17 +132,17 @@ static void test_growth_is_not_motion(void **state) {
 
 static void test_empty_and_identical(void **state) {
   (void)state;
-  lsm_mask a = new_mask(64, 64), b = new_mask(64, 64);
+  lsm_mask a = lsm_test_mask(64, 64), b = lsm_test_mask(64, 64);
   int dx = 5, dy = 5;
   register_ok(&a, &b, &dx, &dy); /* both empty */
   assert_int_equal(dx, 0);
   assert_int_equal(dy, 0);
-  paint_disc(&a, 20, 30, 8);
+  lsm_test_paint_disc(&a, 20, 30, 8);
   dx = dy = 5;
   register_ok(&a, &b, &dx, &dy); /* b empty */
   assert_int_equal(dx, 0);
   assert_int_equal(dy, 0);
-  paint_disc(&b, 20, 30, 8);
+  lsm_test_paint_disc(&b, 20, 30, 8);
   register_ok(&a, &b, &dx, &dy); /* identical: no shift */
   assert_int_equal(dx, 0);
   assert_int_equal(dy, 0);

@@ -593,6 +593,47 @@ static void test_align_auto_growth(void **state) {
   for (int m = 0; m < 3; ++m) sink_free(&by_mode[m].sink);
 }
 
+/* Parts moving apart (lsm_parts): two discs r = 5 at x = 40 and 60 (z = 0)
+ * are at x = 20 and 80 at z = 8.  Neither overlaps itself across the gap and
+ * the slice's centroid stays, so alignment cannot help; each disc must
+ * travel its own straight line (centroid within 1 px of 40 - 2.5 z and
+ * 60 + 2.5 z) and keep its area, for ls and pls, cubic and linear.  Blend
+ * stays the classic baseline. */
+static void test_parts_apart(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{2, {disc(40, C, 5), disc(60, C, 5)}},
+                             {2, {disc(20, C, 5), disc(80, C, 5)}}};
+  const double z[2] = {0, 8};
+  for (int variant = 0; variant < 3; ++variant) {
+    lsm_stack_opts o;
+    default_opts(&o);
+    if (variant == 1) o.interp = LSM_INTERP_LINEAR;
+    if (variant == 2) o.method = LSM_METHOD_PLS;
+    run r;
+    assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 9);
+    check_exact_input(&r, 0, 0);
+    check_exact_input(&r, 8, 1);
+    const double a0 = (double)area(r.sink.s[0].phi, W, H);
+    double worst = 0.0;
+    for (size_t k = 1; k < 8; ++k) {
+      double cx[8], cy[8];
+      const float *phi = r.sink.s[k].phi;
+      const int n = components(phi, W, H, 1, 1, 0, cx, cy);
+      if (n != 2) fail_msg("z = %zu: %d components (want 2)", k, n);
+      const double left = cx[0] < cx[1] ? cx[0] : cx[1], right = cx[0] < cx[1] ? cx[1] : cx[0];
+      const double el = 40.0 - 2.5 * (double)k, er = 60.0 + 2.5 * (double)k;
+      worst = fmax(worst, fmax(fabs(left - el), fabs(right - er)));
+      worst = fmax(worst, fmax(fabs(cy[0] - C), fabs(cy[1] - C)));
+      assert_true(fabs((double)area(phi, W, H) - a0) <= 2.0 * 2.0 * PI * 5.0);
+    }
+    print_message("parts apart (%s, %s): worst centroid offset %.3f px\n",
+                  lsm_method_name(o.method), lsm_interp_name(o.interp), worst);
+    assert_true(worst <= 1.0);
+    sink_free(&r.sink);
+  }
+}
+
 /* ------------------------------------------------------------------------ */
 /* outline input, nested contours                                            */
 
@@ -761,6 +802,7 @@ int main(void) {
       cmocka_unit_test(test_vanish_appear),
       cmocka_unit_test(test_align),
       cmocka_unit_test(test_align_auto_growth),
+      cmocka_unit_test(test_parts_apart),
       cmocka_unit_test(test_outline_ring),
       cmocka_unit_test(test_outline_vase),
       cmocka_unit_test(test_per_iteration),
