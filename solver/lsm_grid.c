@@ -32,6 +32,26 @@ size_t lsm_mask_count(const lsm_mask *mask) {
   return count;
 }
 
+int lsm_mask_bounds(const lsm_mask *mask, int *x0, int *y0, int *x1, int *y1) {
+  int bx0 = mask->width, by0 = mask->height, bx1 = -1, by1 = -1;
+  for (int y = 0; y < mask->height; ++y) {
+    const uint8_t *row = mask->pixels + (size_t)y * (size_t)mask->width;
+    for (int x = 0; x < mask->width; ++x) {
+      if (!row[x]) continue;
+      if (x < bx0) bx0 = x;
+      if (x > bx1) bx1 = x;
+      if (y < by0) by0 = y;
+      if (y > by1) by1 = y;
+    }
+  }
+  if (bx1 < 0) return 0;
+  *x0 = bx0;
+  *y0 = by0;
+  *x1 = bx1;
+  *y1 = by1;
+  return 1;
+}
+
 /* Allocates the grid; zero-fills it unless the caller overwrites every value. */
 static lsm_status grid_alloc(int nx, int ny, float dx, float dy, int zero, lsm_grid **out,
                              lsm_err *err) {

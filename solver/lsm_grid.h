@@ -46,6 +46,9 @@ lsm_status lsm_mask_create(int width, int height, lsm_mask *out, lsm_err *err);
 void lsm_mask_free(lsm_mask *mask);
 /* Number of inside pixels. */
 size_t lsm_mask_count(const lsm_mask *mask);
+/* Bounding box of the inside pixels, inclusive; 0 (box untouched) if there
+ * are none. */
+int lsm_mask_bounds(const lsm_mask *mask, int *x0, int *y0, int *x1, int *y1);
 
 /* Allocates an nx x ny grid (ghosts included) filled with zeros. */
 lsm_status lsm_grid_create(int nx, int ny, float dx, float dy, lsm_grid **out,

@@ -10,17 +10,8 @@ typedef struct box {
 } box;
 
 static box mask_box(const lsm_mask *m) {
-  box b = {m->width, m->height, -1, -1};
-  for (int y = 0; y < m->height; ++y) {
-    const uint8_t *row = m->pixels + (size_t)y * (size_t)m->width;
-    for (int x = 0; x < m->width; ++x) {
-      if (!row[x]) continue;
-      if (x < b.x0) b.x0 = x;
-      if (x > b.x1) b.x1 = x;
-      if (y < b.y0) b.y0 = y;
-      if (y > b.y1) b.y1 = y;
-    }
-  }
+  box b = {0, 0, -1, -1};
+  lsm_mask_bounds(m, &b.x0, &b.y0, &b.x1, &b.y1);
   return b;
 }
 

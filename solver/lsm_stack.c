@@ -392,15 +392,8 @@ static void gap_free(gap *g) {
  * the image); *ox, *oy: the window's origin on the image. */
 static lsm_status part_phi(const lsm_mask *part, float h, lsm_grid **phi, int *ox, int *oy,
                            lsm_err *err) {
-  int x0 = part->width, y0 = part->height, x1 = -1, y1 = -1;
-  for (int y = 0; y < part->height; ++y)
-    for (int x = 0; x < part->width; ++x)
-      if (part->pixels[(size_t)y * part->width + x]) {
-        if (x < x0) x0 = x;
-        if (x > x1) x1 = x;
-        if (y < y0) y0 = y;
-        if (y > y1) y1 = y;
-      }
+  int x0 = 0, y0 = 0, x1 = part->width - 1, y1 = part->height - 1;
+  lsm_mask_bounds(part, &x0, &y0, &x1, &y1); /* a part is never empty */
   x0 = x0 - LSM_PART_MARGIN < 0 ? 0 : x0 - LSM_PART_MARGIN;
   y0 = y0 - LSM_PART_MARGIN < 0 ? 0 : y0 - LSM_PART_MARGIN;
   x1 = x1 + LSM_PART_MARGIN >= part->width ? part->width - 1 : x1 + LSM_PART_MARGIN;
