@@ -693,11 +693,11 @@ static void erode_to_area(lsm_grid *work, size_t target, float *scratch) {
     for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) += e;
 }
 
-/* A gap with exactly one empty side: the object ends at mid-gap (the halfway
- * rule; sigma >= 1/2 is empty).  Between the non-empty slice F and mid-gap it
- * is F eroded; phi + e is the exact level-set solution of a uniform inward
- * motion by e, so no PDE is needed.
- * Linear profile: a uniform erosion by cap_depth (only the pair is seen).
+/* A gap with exactly one empty side: F's section is kept at most up to
+ * mid-gap, and in between the object is F eroded; phi + e is the exact
+ * level-set solution of a uniform inward motion by e, so no PDE is needed.
+ * Linear profile: a uniform erosion by cap_depth (only the pair is seen); the
+ * object ends at mid-gap (sigma >= 1/2 is empty).
  * Cubic profile: the end continues what the slices above it were doing.
  *   - Shape: per cell, phi_F + sigma H max(m, 0), m = (phi_F - phi_N) / h_N the
  *     z-slope of phi from the slice N beyond F (in that pair's frame, which
@@ -713,10 +713,22 @@ static void erode_to_area(lsm_grid *work, size_t target, float *scratch) {
  *     area (a paraboloid), so the area is capped by the line through the areas
  *     of N and F, A(sigma) = A_F - sigma H (A_N - A_F) / h_N when the object
  *     narrows toward its end (A_F otherwise), and by A_F (1 - 2 sigma), a
- *     paraboloid closing at mid-gap, when there is no slice beyond F; the shape
- *     is eroded uniformly to meet the cap.
- *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap, a
- *   rounded one closes along its own paraboloid.  Chosen over the previous rule
+ *     paraboloid closing at mid-gap, when there is no slice beyond F (a lone
+ *     section); past mid-gap also by A_F (2 (1 - sigma))^2, a tip whose radius
+ *     shrinks linearly to 0 at the empty slice.  The shape is eroded uniformly
+ *     to meet the cap.
+ *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap and
+ *   closes in a tip at the empty slice, a rounded one closes along its own
+ *   paraboloid.  The tip: where a flat end lies inside the gap is unknown;
+ *   mid-gap is the median, but a slice left empty where the object is present
+ *   costs the pooled 95 % Hausdorff distance the image size for its whole
+ *   outline, and an object cut one slice above the empty slice loses half a
+ *   gap.  validation/padded.py (10 shapes cut to the object plus one empty
+ *   slice, every 8th / 16th): pooled Dice 0.9654 -> 0.9749 / 0.9243 -> 0.9452,
+ *   pooled HD95 13.7 -> 2.6 / 52.5 -> 7.5 px; end_offsets.py (ends at every
+ *   offset, 14 shapes, strides 4, 8, 16): pooled Dice 0.9517 -> 0.9490, pooled
+ *   HD95 11.4 -> 15.2 px, the price of the tip when the end is equally likely
+ *   anywhere.  Before that, the area cap was chosen over the previous rule
  *   (the monotone cubic through N, F and a virtual slice phi_F + R at the empty
  *   one, R the largest depth, with the end held in place) with
  *   validation/end_offsets.py, which places the object's ends at every offset
@@ -771,9 +783,11 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
       for (int j = 0; j < work->ny; ++j)
         for (int i = 0; i < work->nx; ++i)
           LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(slope, i, j);
-      const double area = sigma >= 0.5 ? 0.0 : fmax(area_f + sigma * H * area_rate, 0.0);
+      const double radius = fmin(1.0, 2.0 * (1.0 - sigma)); /* of the tip past mid-gap */
+      const double area =
+          fmin(fmax(area_f + sigma * H * area_rate, 0.0), area_f * radius * radius);
       erode_to_area(work, (size_t)floor(area), scratch);
-      if (sigma >= 0.5) /* past the end: outside, the field stays continuous */
+      if (area < 1.0) /* past the end: outside, the field stays continuous */
         for (int j = 0; j < work->ny; ++j)
           for (int i = 0; i < work->nx; ++i)
             LSM_AT(work, i, j) = fmaxf(LSM_AT(work, i, j), 1e-3f * full->dx);

@@ -30,10 +30,12 @@
  * by the minimum.
  *
  * Empty slices: the object is absent there.  Next to a non-empty slice A the
- * object shrinks to nothing at mid-gap: the empty side gets the constant
- * target phi = c, with c chosen so that the deepest point of A (depth R)
- * vanishes at s = 1/2 — c = R for the blend (zero set of (1-s) phi_A + s c),
- * c = R / ln 2 for the morph (the front then erodes at speed c and t(1/2) = ln 2).
+ * object keeps A's section at most up to mid-gap.  With the linear profile it
+ * ends there (a paraboloid cap for ls and pls, the zero set of
+ * (1-s) phi_A + s R for the blend, R the depth of A's deepest point; per
+ * iteration the morph toward the constant R / ln 2).  With the cubic profile
+ * the end follows the trend of the slices before A, and a section still whole
+ * at mid-gap closes in a tip at the empty slice (README, method item 7).
  */
 #ifndef LSM_STACK_H
 #define LSM_STACK_H

@@ -129,7 +129,7 @@ def main():
     s.md("Held-out slices where %s is worse than the nearest kept slice by more than 0.05 in "
          "Dice: %s.%s" % (ls_name, "; ".join(big) if big else "none",
                           " All of them lie in the first gap, next to the empty slice 1, where the "
-                          "empty-slice cap shrinks the object toward mid-gap while the true "
+                          "empty-slice cap shrinks the object past mid-gap while the true "
                           "bunny keeps nearly the section of the kept slice above it." if big and
                           first_gap and empty and empty[0] == 1 else ""))
     s.md()
