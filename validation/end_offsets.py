@@ -121,13 +121,9 @@ def pchip_reference(stack, k, empty_rule):
     return result
 
 
-def run_offset(lsm, truth, k, m, methods, extra, work):
-    """Scores of every method with m empty slices added below the truth."""
-    empty = np.zeros(truth[0].shape, bool)
-    stack = [empty] * m + list(truth)
-    while (len(stack) - 1) % k or stack[-1].any():
-        stack.append(empty)
-    stack = np.array(stack)
+def score_stack(lsm, stack, k, methods, extra, work, reference=pchip_reference):
+    """`lsmorph score` of every method on a truth stack, every k-th slice kept:
+    {method: score JSON}.  reference(stack, k, rule) gives the pchip-RULE rows."""
     tdir, kdir, odir = (os.path.join(work, d) for d in ("truth", "kept", "out"))
     for d in (tdir, kdir):
         shutil.rmtree(d, ignore_errors=True)
@@ -141,28 +137,35 @@ def run_offset(lsm, truth, k, m, methods, extra, work):
         shutil.rmtree(odir, ignore_errors=True)
         if method.startswith("pchip-"):
             os.makedirs(os.path.join(odir, "slices"))
-            for i, sl in enumerate(pchip_reference(stack, k, method[len("pchip-"):])):
+            for i, sl in enumerate(reference(stack, k, method[len("pchip-"):])):
                 vlib.write_mask(os.path.join(odir, "slices", "%05d.png" % (i + 1)), sl)
         else:
             subprocess.run([lsm, "reconstruct", kdir, "-o", odir, "--spacing", str(k),
                             "--method", method, "-q", "--no-preview"] + extra, check=True)
         out = subprocess.run([lsm, "score", tdir, odir, "--stride", str(k)], check=True,
                              capture_output=True, text=True).stdout
-        j = json.loads(out)
-        scores[method] = [j["dice_volume"], j["dice"], j["hd95"], j["hd95_pooled"],
-                          j["one_sided_empty"]]
+        scores[method] = json.loads(out)
     return scores
 
 
-def main():
-    args = sys.argv[1:]
+def run_offset(lsm, truth, k, m, methods, extra, work):
+    """Scores of every method with m empty slices added below the truth."""
+    empty = np.zeros(truth[0].shape, bool)
+    stack = [empty] * m + list(truth)
+    while (len(stack) - 1) % k or stack[-1].any():
+        stack.append(empty)
+    scores = score_stack(lsm, np.array(stack), k, methods, extra, work)
+    return {m_: [j["dice_volume"], j["dice"], j["hd95"], j["hd95_pooled"], j["one_sided_empty"]]
+            for m_, j in scores.items()}
+
+
+def parse_args(args, opts, name):
+    """[BUILD_DIR] [--OPTION VALUE ...] [-- EXTRA]: (lsmorph path, opts, extra)."""
     extra = []
     if "--" in args:
         extra = args[args.index("--") + 1:]
         args = args[:args.index("--")]
     build = "build"
-    opts = {"--strides": "8,16", "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone",
-            "--methods": "ls,blend"}
     i = 0
     while i < len(args):
         if args[i] in opts and i + 1 < len(args):
@@ -174,7 +177,14 @@ def main():
     lsm = os.path.join(vlib.ROOT, build, "lsmorph") if not os.path.isabs(build) else \
         os.path.join(build, "lsmorph")
     if not os.access(lsm, os.X_OK):
-        raise SystemExit("end_offsets: %s is missing (run make)" % lsm)
+        raise SystemExit("%s: %s is missing (run make)" % (name, lsm))
+    return lsm, opts, extra
+
+
+def main():
+    lsm, opts, extra = parse_args(sys.argv[1:], {
+        "--strides": "8,16", "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone",
+        "--methods": "ls,blend"}, "end_offsets")
     print("| shape | kept | method | pooled Dice | mean Dice | mean HD95 (px) | pooled HD95 (px) "
           "| one side empty |")
     print("|---|---|---|---|---|---|---|---|")

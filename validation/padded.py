@@ -20,21 +20,18 @@ a held-out slice empty on one side only counts the image size for each of its
 boundary pixels), mean per-slice Dice, mean HD95 over the slices non-empty on
 both sides, and the count of slices empty on one side; then the means.
 """
-import json
-import os
-import shutil
-import subprocess
 import sys
 import tempfile
 
 import numpy as np
 
 import end_offsets as eo
-import vlib
 
 
-def pchip_r(stack, k):
-    """Monotone cubic through the kept slices, an empty one valued R."""
+def reference(stack, k, rule):
+    """end_offsets' pchip references, and pchip-R: an empty kept slice valued R."""
+    if rule != "R":
+        return eo.pchip_reference(stack, k, rule)
     from scipy.interpolate import PchipInterpolator
     zs = list(range(0, len(stack), k))
     sdfs = [eo.plain_sdf(stack[z]) if stack[z].any() else None for z in zs]
@@ -51,56 +48,11 @@ def pchip_r(stack, k):
     return result
 
 
-def run(lsm, stack, k, methods, extra, work):
-    tdir, kdir, odir = (os.path.join(work, d) for d in ("truth", "kept", "out"))
-    for d in (tdir, kdir):
-        shutil.rmtree(d, ignore_errors=True)
-        os.makedirs(d)
-    for i, sl in enumerate(stack):
-        vlib.write_mask(os.path.join(tdir, "%04d.png" % (i + 1)), sl)
-        if i % k == 0:
-            vlib.write_mask(os.path.join(kdir, "%04d.png" % (i + 1)), sl)
-    scores = {}
-    for method in methods:
-        shutil.rmtree(odir, ignore_errors=True)
-        if method.startswith("pchip-"):
-            os.makedirs(os.path.join(odir, "slices"))
-            rule = method[len("pchip-"):]
-            result = pchip_r(stack, k) if rule == "R" else eo.pchip_reference(stack, k, rule)
-            for i, sl in enumerate(result):
-                vlib.write_mask(os.path.join(odir, "slices", "%05d.png" % (i + 1)), sl)
-        else:
-            subprocess.run([lsm, "reconstruct", kdir, "-o", odir, "--spacing", str(k),
-                            "--method", method, "-q", "--no-preview"] + extra, check=True)
-        out = subprocess.run([lsm, "score", tdir, odir, "--stride", str(k)], check=True,
-                             capture_output=True, text=True).stdout
-        j = json.loads(out)
-        scores[method] = (j["dice_volume"], j["hd95_pooled"], j["dice"], j["hd95"],
-                          j["one_sided_empty"])
-    return scores
-
-
 def main():
-    args = sys.argv[1:]
-    extra = []
-    if "--" in args:
-        extra = args[args.index("--") + 1:]
-        args = args[:args.index("--")]
-    build = "build"
-    opts = {"--strides": "8,16", "--methods": "ls,blend,pchip-mirror,pchip-zero,pchip-R",
-            "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork"}
-    i = 0
-    while i < len(args):
-        if args[i] in opts and i + 1 < len(args):
-            opts[args[i]] = args[i + 1]
-            i += 2
-        else:
-            build = args[i]
-            i += 1
-    lsm = build if os.path.isabs(build) else os.path.join(vlib.ROOT, build)
-    lsm = os.path.join(lsm, "lsmorph")
-    if not os.access(lsm, os.X_OK):
-        raise SystemExit("padded: %s is missing (run make)" % lsm)
+    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
+        "--strides": "8,16", "--methods": "ls,blend,pchip-mirror,pchip-zero,pchip-R",
+        "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork"},
+        "padded")
     methods = opts["--methods"].split(",")
     strides = [int(v) for v in opts["--strides"].split(",")]
     print("| shape | kept | method | pooled Dice | pooled HD95 (px) | mean Dice | mean HD95 (px) "
@@ -116,11 +68,14 @@ def main():
             empty = np.zeros_like(truth[0])
             stack = np.array([empty] + list(truth[nz[0]:nz[-1] + 1]) + [empty])
             for k in strides:
-                scores = run(lsm, stack, k, methods, extra, work)
+                scores = eo.score_stack(lsm, stack, k, methods, extra, work, reference)
                 for m in methods:
-                    totals.setdefault((k, m), []).append(scores[m])
+                    j = scores[m]
+                    row = (j["dice_volume"], j["hd95_pooled"], j["dice"], j["hd95"],
+                           j["one_sided_empty"])
+                    totals.setdefault((k, m), []).append(row)
                     print("| %s | every %d | %s | %.4f | %.2f | %.3f | %.2f | %d |"
-                          % ((shape, k, m) + scores[m]), flush=True)
+                          % ((shape, k, m) + row), flush=True)
     for (k, m), rows in sorted(totals.items()):
         a = np.array(rows, float).mean(axis=0)
         print("| **mean** | every %d | %s | %.4f | %.2f | %.3f | %.2f | %.1f |" % ((k, m) + tuple(a)))
