@@ -19,7 +19,10 @@ Shapes: the bunny (../shared/data/bunny, when present) and analytic solids on
 128 x 128 slices, 100 slices tall (also smallball, tube, fork, torus: small,
 slanted and branching structures; taper, swim, vee: a narrowing slanted vessel,
 a thin ellipse that moves and turns, two tubes moving apart; branch: a straight
-tube with a side branch leaving it, whose centroid drifts though the trunk stays).  Takes a few minutes.
+tube with a side branch leaving it, whose centroid drifts though the trunk stays;
+blob, lens, disc: a ball, a flat ellipsoid and a short cylinder 14 to 21 slices
+tall, which at every 8th or 16th slice leave one kept slice through them).
+Takes a few minutes.
 
 Methods: lsmorph's (ls, blend, pls) and three references that are not lsmorph:
 a monotone cubic (scipy's PchipInterpolator, Fritsch-Carlson slopes) through
@@ -29,7 +32,9 @@ differ only in what an empty kept slice contributes:
   pchip-mirror  |phi| of the nearest non-empty kept slice (positive everywhere)
   pchip-zero    0 everywhere
   pchip-drop    nothing: the spline runs through the non-empty slices only
-                and extrapolates beyond them (kept slices are copied as given)
+                and extrapolates beyond them (kept slices are copied as given;
+                with one non-empty kept slice it is copied to every slice)
+With no non-empty kept slice at all every reference is empty.
 These need python3-scipy (`make validate` installs it).
 """
 import json
@@ -63,6 +68,12 @@ def solid(name):
         return (np.sqrt(x ** 2 + y ** 2) < 0.9 * (45 - z)) & (z > -45) & (z < 45)
     if name == "smallball":  # a structure a few pixels across
         return x ** 2 + y ** 2 + (z / 4) ** 2 < 7 ** 2
+    if name == "blob":  # a small ball, 21 slices tall
+        return x ** 2 + y ** 2 + z ** 2 < 10 ** 2
+    if name == "lens":  # a flat ellipsoid, 17 slices tall
+        return (x / 30) ** 2 + (y / 20) ** 2 + (z / 8.6) ** 2 < 1
+    if name == "disc":  # a short cylinder, 14 slices tall
+        return (x ** 2 + y ** 2 < 20 ** 2) & (abs(z) < 7)
     if name == "taper":  # a slanted vessel narrowing from 8 to about 1 px radius
         return (x - 1.2 * z) ** 2 + y ** 2 < np.maximum(4.5 - z / 15, 0) ** 2
     if name == "swim":  # a thin ellipse moving 1.2 px and turning 0.05 rad per slice
@@ -108,6 +119,13 @@ def pchip_reference(stack, k, empty_rule):
     zs = list(range(0, len(stack), k))
     sdfs = [plain_sdf(stack[z]) if stack[z].any() else None for z in zs]
     full = [j for j, d in enumerate(sdfs) if d is not None]
+    if len(full) < (2 if empty_rule == "drop" else 1):
+        # no spline to draw (drop needs two non-empty slices): every slice is the
+        # one non-empty kept slice, or empty
+        result = np.zeros_like(stack, dtype=bool) if not full else \
+            np.repeat(stack[zs[full[0]]][None], len(stack), axis=0)
+        result[::k] = stack[::k]
+        return result
     for j, d in enumerate(sdfs):
         if d is None:
             near = sdfs[min(full, key=lambda q: abs(q - j))]

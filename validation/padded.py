@@ -51,7 +51,7 @@ def reference(stack, k, rule):
 def main():
     lsm, opts, extra = eo.parse_args(sys.argv[1:], {
         "--strides": "8,16", "--methods": "ls,blend,pchip-mirror,pchip-zero,pchip-R",
-        "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork"},
+        "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork,blob,lens,disc"},
         "padded")
     methods = opts["--methods"].split(",")
     strides = [int(v) for v in opts["--strides"].split(",")]
@@ -68,6 +68,10 @@ def main():
             empty = np.zeros_like(truth[0])
             stack = np.array([empty] + list(truth[nz[0]:nz[-1] + 1]) + [empty])
             for k in strides:
+                if len(stack) <= k:  # one kept slice: nothing to reconstruct
+                    print("| %s | every %d | (skipped: %d slices, one kept) | | | | | |"
+                          % (shape, k, len(stack)))
+                    continue
                 scores = eo.score_stack(lsm, stack, k, methods, extra, work, reference)
                 for m in methods:
                     j = scores[m]
