@@ -130,12 +130,12 @@ def headline(report):
             if r["variant"] not in variants:
                 variants.append(r["variant"])
         out.append("")
-        out.append("**5. Bunny** (pooled Dice / mean HD95 px / MSD px; /default = the CLI's "
-                   "defaults):")
+        out.append("**5. Bunny** (pooled Dice / pooled HD95 px / mean HD95 px / MSD px; /default = "
+                   "the CLI's defaults):")
         out.append("")
         out.append(md_table(["variant"] + ["K = %s" % k for k in sorted({r["stride"] for r in rows}, key=int)], [
-            [v] + ["%.4f / %.2f / %.2f" % (float(r["dice_volume"]), float(r["hd95_mean"]),
-                                         float(r["mean_surface"]))
+            [v] + ["%.4f / %.2f / %.2f / %.2f" % (float(r["dice_volume"]), float(r["hd95_pooled"]),
+                                                float(r["hd95_mean"]), float(r["mean_surface"]))
                    for k in sorted({r["stride"] for r in rows}, key=int)
                    for r in rows if r["stride"] == k and r["variant"] == v]
             for v in variants]))

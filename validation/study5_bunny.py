@@ -12,7 +12,7 @@ import numpy as np
 import vlib
 from vlib import fnum, md_table, plt
 
-STRIDES = [4, 8]
+STRIDES = [4, 8, 16]
 MONTAGE_STRIDE = 8
 MONTAGE_SLICES = [7, 21, 45, 69, 79, 93, 101]  # 1-based, all held out at K = 8
 
@@ -29,8 +29,9 @@ def main():
     aligns = [a for a in ("auto", "hull", "none") if a in s.align_modes] or ["hull", "none"]
     # First every method with its defaults, then ls and blend with each other alignment.
     base = [("%s/default" % m, s.method_args(m)) for m in s.methods]
-    if s.has_interp and "ls" in s.methods:
-        base.append(("ls/default, --interp linear", ["--interp", "linear"]))
+    if s.has_interp:  # issue 8: ls and blend, linear and cubic
+        base += [("%s/default, --interp linear" % m, s.method_args(m) + ["--interp", "linear"])
+                 for m in ("ls", "blend") if m in s.methods]
     base.append(("nearest", None))
     metrics, per = {}, {}
     names = []
@@ -95,7 +96,7 @@ def main():
              truth_dir, n, width, width, ", ".join(map(str, empty)) or "none",
              ", ".join(map(str, STRIDES)), vlib.describe_options(default_opts),
              "; pls: same with method pls" if pls_opts else "", "|".join(aligns),
-             "; ls with `--interp linear` to isolate the effect of the default z-profile"
+             "; ls and blend with `--interp linear` to isolate the effect of the default z-profile"
              if s.has_interp else "",
              "; ".join("K = %d: the last %d slices" % (k, u) for k, u in unscored.items())))
     s.md()
@@ -163,8 +164,9 @@ def main():
          "(compare the variants in bunny_per_slice.csv)." % (
              ls_name, "; ".join("K = %d: slices %s" % (k, ", ".join(map(str, v)) or "none")
                                 for k, v in one_sided.items()),
-             " Slice 1 is empty, so the first gap is closed by the empty-slice cap, which ends "
-             "the object inside the gap (lsm_stack.h) while the true bunny starts at slice 2."
+             " Slice 1 is empty, so the first gap is closed by the empty-slice rule "
+             "(lsm_stack.h): the kept section, whole at most to mid-gap, closes in a tip at the "
+             "empty slice, while the true bunny starts at slice 2 with nearly its full base."
              if empty and empty[0] == 1 and areas[1] > 0 else "", width))
     s.md()
 
