@@ -701,7 +701,8 @@ static void erode_to_area(lsm_grid *work, size_t target, float *scratch) {
  * the gap, and its area falls linearly (p = 1); p is linear in between. */
 static double end_tip_power(double area_f, double area_n) {
   const double narrowing = area_f > 0.0 ? (area_n - area_f) / area_f : 1.0;
-  return 1.0 + fmin(fmax(narrowing / 0.1, 0.0), 1.0);
+  const double cone_from = 0.1; /* narrowing at which the tip is a cone */
+  return 1.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
 }
 
 /* A gap with exactly one empty side: F's section is kept at most up to
@@ -745,9 +746,10 @@ static double end_tip_power(double area_f, double area_n) {
  *   / 2.6 px, 0.9452 / 7.5 px); end_offsets.py (ends at every offset, 14
  *   shapes, strides 4, 8, 16): pooled Dice 0.9517 -> 0.9476, pooled HD95 11.4
  *   -> 16.0 px (cone tip: 0.9496, 15.2 px), the price of the tip when the end
- *   is equally likely anywhere.  Before that, the area cap was chosen over the previous rule
- *   (the monotone cubic through N, F and a virtual slice phi_F + R at the empty
- *   one, R the largest depth, with the end held in place) with
+ *   is equally likely anywhere.  Before that, the area cap was chosen over
+ *   the previous rule (the monotone cubic through N, F and a virtual slice
+ *   phi_F + R at the empty one, R the largest depth, with the end held in
+ *   place) with
  *   validation/end_offsets.py, which places the object's ends at every offset
  *   inside a gap: over 13 shapes at strides 4, 8 and 16 the mean per-slice
  *   Dice goes from 0.905 to 0.917 and the mean HD95 from 1.24 to 1.12 px on
@@ -806,9 +808,9 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
       for (int j = 0; j < work->ny; ++j)
         for (int i = 0; i < work->nx; ++i)
           LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(slope, i, j);
-      const double radius = fmin(1.0, 2.0 * (1.0 - sigma)); /* of the tip past mid-gap */
+      const double tip = fmin(1.0, 2.0 * (1.0 - sigma)); /* 1 up to mid-gap, 0 at the empty slice */
       const double area =
-          fmin(fmax(area_f + sigma * H * area_rate, 0.0), area_f * pow(radius, tip_power));
+          fmin(fmax(area_f + sigma * H * area_rate, 0.0), area_f * pow(tip, tip_power));
       erode_to_area(work, (size_t)floor(area), scratch);
       if (area < 1.0) /* past the end: outside, the field stays continuous */
         for (int j = 0; j < work->ny; ++j)
