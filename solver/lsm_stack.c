@@ -196,6 +196,11 @@ typedef struct frame {
  * difference does overlap more.  A centroid can move while the shape stays: a
  * part grows out on one side (ears above a head) or shrinks away; then the
  * best translation stays near zero and the pair is morphed in place. */
+/* auto alignment's thresholds (see resolve_align) */
+static const double align_apart_overlap = 0.1; /* in-place overlap / smaller area below this: apart */
+static const double align_alike_iou = 0.5;     /* IoU at the best translation from this, */
+static const double align_alike_gain = 1.5;    /* and this many times the IoU in place: alike */
+
 static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b, int width,
                                 int height, lsm_align *align, lsm_err *err) {
   *align = asked;
@@ -214,7 +219,20 @@ static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b,
   int tx, ty;
   LSM_TRY(lsm_register_shift(&a->filled, &b->filled, &tx, &ty, err));
   const long to_centroid = (long)(tx - dx) * (tx - dx) + (long)(ty - dy) * (ty - dy);
-  if (to_centroid < (long)tx * tx + (long)ty * ty) *align = LSM_ALIGN_HULL;
+  if (to_centroid >= (long)tx * tx + (long)ty * ty) return LSM_OK;
+  /* A move, not a change of shape: either the two barely touch in place, or
+   * the translation of largest overlap makes them alike (IoU >= 1/2, and 1.5
+   * times the IoU in place: the shift explains most of the difference).  A
+   * small section overlapping a large one half or more in place (a part of an
+   * organ or a mesh narrowing, a section splitting) fits inside it at many
+   * shifts, so the best shift says nothing; it is morphed in place. */
+  const size_t area_a = lsm_mask_count(&a->filled), area_b = lsm_mask_count(&b->filled);
+  const size_t smaller = area_a < area_b ? area_a : area_b;
+  const size_t moved = lsm_mask_overlap(&a->filled, &b->filled, tx, ty);
+  const int apart = (double)in_place < align_apart_overlap * (double)smaller;
+  const double iou_moved = (double)moved / (double)(area - moved);
+  const int alike = iou_moved >= align_alike_iou && iou_moved >= align_alike_gain * iou;
+  if (apart || alike) *align = LSM_ALIGN_HULL;
   return LSM_OK;
 }
 
@@ -961,6 +979,8 @@ static lsm_status run_gap_regular(stack_run *r, const window *w, const double *z
   LSM_TRY(gap_setup(r, w, &g, err));
   lsm_status st = LSM_OK;
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
+  ps->aligned = g.f.aligned;
+  ps->moving_parts = g.parts;
   if ((a->empty && b->empty) || g.rest_empty) {
     lsm_grid_fill(g.phi_a, g.f.clamp);
     for (size_t k = 0; st == LSM_OK && k < n; ++k) {
@@ -1000,6 +1020,8 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
   gap g;
   LSM_TRY(gap_setup(r, w, &g, err));
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
+  ps->aligned = g.f.aligned;
+  ps->moving_parts = g.parts;
   /* An empty source has no front to move: morph the target into the empty
    * slice instead (it shrinks to nothing) and emit its iterates in reverse.
    * With one empty side the object ends halfway (as in default mode): the

@@ -18,10 +18,13 @@
  * monotone cubic through the neighbouring slices' centroids, --interp cubic).
  * Auto alignment (the default) applies this to a pair only when its shape
  * moved: the two overlap little in place (IoU < 1/2), shifting the source by
- * the centroid difference makes it overlap the target more, and the
- * translation of largest overlap (lsm_register) lies nearer the centroid
- * difference than no shift.  A pair whose shape changed (a branch or an ear
- * growing out moves the centroid without moving the object) is not aligned.
+ * the centroid difference makes it overlap the target more, the translation
+ * of largest overlap (lsm_register) lies nearer the centroid difference than
+ * no shift, and either the two barely touch in place (overlap < 1/10 of the
+ * smaller) or that translation makes them alike (IoU >= 1/2 and 1.5 times the
+ * IoU in place).  A pair whose shape changed (a branch or an ear growing out
+ * moves the centroid without moving the object; a narrow part next to a wide
+ * body fits inside it at many shifts) is not aligned.
  *
  * Moving parts (ls and pls, mask input, unaligned pairs): components that
  * moved off their place by the next slice, paired by lsm_parts, are taken
@@ -133,6 +136,8 @@ typedef struct lsm_pair_stats {
   long long cells;        /* grid cells updated per iteration */
   size_t slices;          /* intermediate slices emitted */
   int hit_max_iter;       /* 1 if max_iter stopped the pair early */
+  int aligned;            /* 1 if the pair was hull-aligned (--align hull, or chosen by auto) */
+  int moving_parts;       /* parts that moved off their place, morphed on their own (lsm_parts) */
   /* --method pls (both morphs of a two-sided pair added up) */
   long long pls_seeded;     /* particles seeded */
   long long pls_discarded;  /* dropped by attraction (and leaving the grid) */

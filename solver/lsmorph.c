@@ -367,6 +367,8 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
     json_number(f, p->t_final);
     fprintf(f, ", \"slices\": %zu, \"hit_max_iter\": %s, \"rank\": %d", p->slices,
             p->hit_max_iter ? "true" : "false", p->rank);
+    fprintf(f, ", \"aligned\": %s, \"moving_parts\": %d", p->aligned ? "true" : "false",
+            p->moving_parts);
     if (o->method == LSM_METHOD_PLS) {
       fprintf(f, ", \"particles\": {\"seeded\": %lld, \"discarded\": %lld, \"escaped_per_step\": ",
               p->pls_seeded, p->pls_discarded);

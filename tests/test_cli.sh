@@ -103,7 +103,7 @@ if [ -f "$J" ]; then
   # 7 inputs -> 6 pairs, each an object with these fields (counted inside
   # the "pairs" list only: "totals" has "iterations" and "seconds" too).
   awk '/"pairs": *\[/ { on = 1 } on { print } on && /\]/ { exit }' "$J" >"$TMP/pairs"
-  for key in source target iterations dt cp seconds cells; do
+  for key in source target iterations dt cp seconds cells aligned moving_parts; do
     c=$(json_count "$TMP/pairs" "$key")
     check "run.json has 6 \"$key\" entries (got $c)" [ "$c" -eq 6 ]
   done
@@ -115,13 +115,14 @@ if [ -f "$J" ]; then
     grep -q '"source": "006.png", "target": "007.png"' "$J"
   check "run.json: no pair hit max_iter" sh -c "! grep -q '\"hit_max_iter\": true' '$J'"
   if command -v python3 >/dev/null 2>&1; then
-    check "run.json is valid JSON: 6 pairs, positive iterations, dt, cells; 25 slices" python3 -c '
+    check "run.json is valid JSON: 6 pairs, positive iterations, dt, cells, none aligned (nested, centred rectangles); 25 slices" python3 -c '
 import json, sys
 d = json.load(open(sys.argv[1]))
 p = d["pairs"]
 assert len(p) == 6, len(p)
 for q in p:
     assert q["iterations"] > 0 and q["dt"] > 0 and q["cells"] > 0 and q["seconds"] >= 0, q
+    assert q["aligned"] is False and q["moving_parts"] == 0, q
 assert d["output"]["slices"] == 25, d["output"]
 ' "$J"
   fi

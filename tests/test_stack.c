@@ -522,14 +522,12 @@ static void test_vanish_appear(void **state) {
  * align hull: both are moved to the centre (identical there: no motion), and
  * slice z is moved back by the linear interpolation of the two shifts, so it is
  * one disc centred at (25 + 50 z / 7, 50) (fractional shifts: bilinear).
- * align none: the discs do not overlap, so nothing travels: the left disc
- * erodes in place (its points are far outside the target) while the right one
- * grows in place from nothing late in the gap; with the two-sided morph the
- * object is absent in the middle of the gap (observed: components per slice
- * 1 1 0 0 0 0 1 1 at z = 0..7; the blend's zero set of (1 - s) phi_A + s phi_B,
- * whose minimum is 50 s - 10 at the left centre, is likewise empty for
- * 0.2 < s < 0.8, i.e. z = 2..5).  That is
- * what the level-set morph does without alignment, not a crash: only the
+ * align none: the discs do not overlap; the morph alone would erode the left
+ * disc in place and grow the right one late in the gap (the object absent in
+ * the middle, as the blend's zero set of (1 - s) phi_A + s phi_B, whose
+ * minimum is 50 s - 10 at the left centre, is empty for 0.2 < s < 0.8), but
+ * the two discs are a moving part (lsm_parts) and travel (observed: one
+ * component per slice).  test_parts_apart checks that rule; here only the
  * exact endpoints and a clean run are asserted. */
 static void test_align(void **state) {
   (void)state;
@@ -582,6 +580,31 @@ static void test_align(void **state) {
   sink_free(&r.sink);
 }
 
+/* Runs a two-slice stack (z = 0 and z_b, one output slice per unit) with
+ * --align auto, none and hull, and counts the cells of the intermediate slices
+ * where auto, and hull, differ from none. */
+static void align_modes_differ(const slice_def defs[2], double z_b, size_t *differ_auto,
+                               size_t *differ_hull) {
+  const double z[2] = {0, z_b};
+  const size_t n = (size_t)z_b + 1;
+  lsm_stack_opts o;
+  run by_mode[3];
+  const lsm_align modes[3] = {LSM_ALIGN_AUTO, LSM_ALIGN_NONE, LSM_ALIGN_HULL};
+  for (int m = 0; m < 3; ++m) {
+    default_opts(&o);
+    o.align = modes[m];
+    assert_int_equal(run_stack(&by_mode[m], W, H, 0, defs, z, 2, &o), LSM_OK);
+    assert_int_equal(by_mode[m].sink.n, n);
+  }
+  *differ_auto = *differ_hull = 0;
+  for (size_t k = 1; k + 1 < n; ++k)
+    for (int p = 0; p < W * H; ++p) {
+      *differ_auto += by_mode[0].sink.s[k].phi[p] != by_mode[1].sink.s[k].phi[p];
+      *differ_hull += by_mode[2].sink.s[k].phi[p] != by_mode[1].sink.s[k].phi[p];
+    }
+  for (int m = 0; m < 3; ++m) sink_free(&by_mode[m].sink);
+}
+
 /* --align auto when a part grows out of a shape that stays: a disc (r = 12)
  * becomes a bar (9 px wide) reaching from it to the right edge.  The hull
  * centroid moves ~35 px right and moving the disc by that much would overlap
@@ -591,26 +614,30 @@ static void test_align(void **state) {
 static void test_align_auto_growth(void **state) {
   (void)state;
   const slice_def defs[2] = {{1, {disc(20, C, 12)}}, {2, {disc(20, C, 4), rect(16, 46, 95, 54, 0)}}};
-  const double z[2] = {0, 6};
-  lsm_stack_opts o;
-  run by_mode[3];
-  const lsm_align modes[3] = {LSM_ALIGN_AUTO, LSM_ALIGN_NONE, LSM_ALIGN_HULL};
-  for (int m = 0; m < 3; ++m) {
-    default_opts(&o);
-    o.align = modes[m];
-    assert_int_equal(run_stack(&by_mode[m], W, H, 0, defs, z, 2, &o), LSM_OK);
-    assert_int_equal(by_mode[m].sink.n, 7);
-  }
-  size_t differ_auto = 0, differ_hull = 0;
-  for (size_t k = 1; k < 6; ++k)
-    for (int p = 0; p < W * H; ++p) {
-      differ_auto += by_mode[0].sink.s[k].phi[p] != by_mode[1].sink.s[k].phi[p];
-      differ_hull += by_mode[2].sink.s[k].phi[p] != by_mode[1].sink.s[k].phi[p];
-    }
+  size_t differ_auto, differ_hull;
+  align_modes_differ(defs, 6, &differ_auto, &differ_hull);
   print_message("growth: cells differing from none: auto %zu, hull %zu\n", differ_auto, differ_hull);
   assert_int_equal(differ_auto, 0);
   assert_true(differ_hull > 0);
-  for (int m = 0; m < 3; ++m) sink_free(&by_mode[m].sink);
+}
+
+/* --align auto when a small section meets a large, different one: a disc
+ * (r = 6) at x = 30 becomes a disc (r = 22) at x = 72 with a bar (5 px wide)
+ * reaching left to x = 28, which covers about half of the small disc in place
+ * (a narrow part of an organ or a mesh next to its wide body).  The centroid
+ * moves ~38 px; the small disc fits whole only inside the large one, about 20
+ * px away, nearer the centroid difference than no shift, so the centroid and
+ * registration tests alone would align.  But at that shift the two are not
+ * alike (IoU ~0.07: one is a small part of the other), so nothing moved and
+ * auto must morph in place, exactly as --align none. */
+static void test_align_auto_inside(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(30, C, 6)}}, {2, {disc(72, C, 22), rect(28, 48, 72, 52, 0)}}};
+  size_t differ_auto, differ_hull;
+  align_modes_differ(defs, 8, &differ_auto, &differ_hull);
+  print_message("inside: cells differing from none: auto %zu, hull %zu\n", differ_auto, differ_hull);
+  assert_int_equal(differ_auto, 0);
+  assert_true(differ_hull > 0);
 }
 
 /* Parts moving apart (lsm_parts): two discs r = 5 at x = 40 and 60 (z = 0)
@@ -822,6 +849,7 @@ int main(void) {
       cmocka_unit_test(test_vanish_appear),
       cmocka_unit_test(test_align),
       cmocka_unit_test(test_align_auto_growth),
+      cmocka_unit_test(test_align_auto_inside),
       cmocka_unit_test(test_parts_apart),
       cmocka_unit_test(test_outline_ring),
       cmocka_unit_test(test_outline_vase),
