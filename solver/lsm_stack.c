@@ -676,39 +676,68 @@ static double cap_depth(lsm_method method, double R, double sigma) {
   return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
 }
 
-/* Cells of a grid inside the object (phi <= 0, as the outputs count them). */
-static size_t inside_count(const lsm_grid *phi) {
-  size_t count = 0;
-  for (int j = 0; j < phi->ny; ++j)
-    for (int i = 0; i < phi->nx; ++i) count += LSM_AT(phi, i, j) <= 0.0f;
-  return count;
-}
-
 static int compare_float(const void *x, const void *y) {
   const float a = *(const float *)x, b = *(const float *)y;
   return (a > b) - (a < b);
 }
 
-/* Raises work uniformly (an erosion, exact for a signed distance) just enough
- * that at most `target` cells stay inside: past the value of the (target+1)-th
- * deepest cell (cells tied with it leave too).  scratch holds nx * ny floats. */
-static void erode_to_area(lsm_grid *work, size_t target, float *scratch) {
-  float deepest_left; /* the deepest of the cells that must leave */
-  if (target == 0) {  /* only the deepest cell matters: no sort */
-    deepest_left = lsm_grid_min(work);
-    if (deepest_left > 0.0f) return;
-  } else {
-    size_t count = 0;
-    for (int j = 0; j < work->ny; ++j)
-      for (int i = 0; i < work->nx; ++i)
-        if (LSM_AT(work, i, j) <= 0.0f) scratch[count++] = LSM_AT(work, i, j);
-    if (count <= target) return;
-    qsort(scratch, count, sizeof *scratch, compare_float);
-    deepest_left = scratch[target];
-  }
-  const float e = 1e-4f * work->dx - deepest_left;
-  for (int j = 0; j < work->ny; ++j)
-    for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) += e;
+/* One 8-connected component of F's section where the object ends (a gap
+ * with one empty side, cubic profile), and how it ends. */
+typedef struct end_part {
+  double area_f;  /* its cells */
+  double area_n;  /* cells of N's components that go on into it (shared by overlap) */
+  double nested;  /* its cells inside N */
+  double weight;  /* share of it that narrows like N -> F; the rest is a flat end */
+  double rate;    /* dA/dz of that share toward the end, <= 0 (cells per unit z) */
+  double power;   /* exponent p of its tip past mid-gap */
+} end_part;
+
+typedef struct end_parts {
+  int count;
+  int32_t *region; /* per cell: the part it lies in or is nearest to (8-connected steps) */
+  size_t *first;   /* count + 1 offsets into inside: part c's cells of F */
+  int32_t *inside; /* F's inside cells, grouped by part */
+  end_part *part;
+} end_parts;
+
+static void end_parts_free(end_parts *e) {
+  free(e->region);
+  free(e->first);
+  free(e->inside);
+  free(e->part);
+  memset(e, 0, sizeof *e);
+}
+
+/* Breadth-first labelling of the 8-connected components of {phi <= 0}:
+ * label[cell] = component (or -1); returns the count. queue: nx * ny. */
+static int32_t label_components(const lsm_grid *phi, int32_t *label, int32_t *queue) {
+  const int nx = phi->nx, ny = phi->ny;
+  const size_t n = (size_t)nx * (size_t)ny;
+  for (size_t k = 0; k < n; ++k) label[k] = -1;
+  int32_t count = 0;
+  for (int j0 = 0; j0 < ny; ++j0)
+    for (int i0 = 0; i0 < nx; ++i0) {
+      const size_t start = (size_t)j0 * nx + i0;
+      if (label[start] >= 0 || LSM_AT(phi, i0, j0) > 0.0f) continue;
+      size_t head = 0, tail = 0;
+      label[start] = count;
+      queue[tail++] = (int32_t)start;
+      while (head < tail) {
+        const int32_t q = queue[head++];
+        const int i = q % nx, j = q / nx;
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const int a = i + di, b = j + dj;
+            if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
+            const size_t t = (size_t)b * nx + a;
+            if (label[t] >= 0 || LSM_AT(phi, a, b) > 0.0f) continue;
+            label[t] = count;
+            queue[tail++] = (int32_t)t;
+          }
+      }
+      count++;
+    }
+  return count;
 }
 
 /* Exponent p of the tip past mid-gap, area A_F (2 (1 - sigma))^p, from the
@@ -721,6 +750,147 @@ static double end_tip_power(double area_f, double area_n) {
   const double narrowing = area_f > 0.0 ? (area_n - area_f) / area_f : 1.0;
   const double cone_from = 0.1; /* narrowing at which the tip is a cone */
   return 1.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
+}
+
+/* F's components and how each ends (see run_gap_cap).  nb: N's field in F's
+ * frame, or NULL (no slice beyond F: every part is a flat end); hn: the
+ * height from N to F. */
+static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, double hn,
+                                 end_parts *e, lsm_err *err) {
+  memset(e, 0, sizeof *e);
+  const int nx = full->nx, ny = full->ny;
+  const size_t n = (size_t)nx * (size_t)ny;
+  int32_t *queue = lsm_alloc(n, sizeof *queue, err, "end components");
+  int32_t *label_n = queue ? lsm_alloc(n, sizeof *label_n, err, "end components") : NULL;
+  e->region = label_n ? lsm_alloc(n, sizeof *e->region, err, "end components") : NULL;
+  if (!e->region) {
+    free(queue);
+    free(label_n);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  e->count = label_components(full, e->region, queue);
+  const int m = e->count;
+  e->part = lsm_alloc((size_t)m + 1, sizeof *e->part, err, "end components");
+  e->first = e->part ? lsm_alloc((size_t)m + 2, sizeof *e->first, err, "end components") : NULL;
+  size_t inside = 0;
+  for (size_t k = 0; k < n; ++k) inside += e->region[k] >= 0;
+  e->inside = e->first ? lsm_alloc(inside + 1, sizeof *e->inside, err, "end components") : NULL;
+  if (!e->inside) {
+    free(queue);
+    free(label_n);
+    end_parts_free(e);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  memset(e->part, 0, ((size_t)m + 1) * sizeof *e->part);
+  memset(e->first, 0, ((size_t)m + 2) * sizeof *e->first);
+  /* F's inside cells grouped by part (a counting sort) */
+  for (size_t k = 0; k < n; ++k)
+    if (e->region[k] >= 0) e->first[e->region[k] + 1]++;
+  for (int c = 0; c < m; ++c) {
+    e->part[c].area_f = (double)e->first[c + 1];
+    e->first[c + 1] += e->first[c];
+  }
+  for (size_t k = 0, *fill = e->first; k < n; ++k)
+    if (e->region[k] >= 0) e->inside[fill[e->region[k]]++] = (int32_t)k;
+  for (int c = m; c > 0; --c) e->first[c] = e->first[c - 1]; /* fill advanced each start */
+  e->first[0] = 0;
+  if (nb) {
+    /* each component of N that overlaps F gives its area to the parts it
+     * overlaps, in proportion to the overlap; one that misses F ends in the
+     * gap N -> F and says nothing about how F ends */
+    const int32_t mn = label_components(nb, label_n, queue);
+    double *n_area = lsm_alloc((size_t)mn + 1, sizeof *n_area, err, "end components");
+    double *n_hits = n_area ? lsm_alloc((size_t)mn + 1, sizeof *n_hits, err, "end components") : NULL;
+    if (!n_hits) {
+      free(n_area);
+      free(queue);
+      free(label_n);
+      end_parts_free(e);
+      return err ? err->status : LSM_ERR_NOMEM;
+    }
+    memset(n_area, 0, ((size_t)mn + 1) * sizeof *n_area);
+    memset(n_hits, 0, ((size_t)mn + 1) * sizeof *n_hits);
+    for (size_t k = 0; k < n; ++k)
+      if (label_n[k] >= 0) {
+        n_area[label_n[k]] += 1.0;
+        if (e->region[k] >= 0) n_hits[label_n[k]] += 1.0;
+      }
+    for (size_t k = 0; k < n; ++k)
+      if (label_n[k] >= 0 && e->region[k] >= 0) {
+        end_part *pc = &e->part[e->region[k]];
+        pc->nested += 1.0;
+        pc->area_n += n_area[label_n[k]] / n_hits[label_n[k]];
+      }
+    free(n_area);
+    free(n_hits);
+  }
+  for (int c = 0; c < m; ++c) {
+    end_part *pc = &e->part[c];
+    /* A part mostly outside N (less than 40 % nested) grows out toward the
+     * end (a tail, a paw, a thin part meeting a wide body): N's area says
+     * nothing of how it stops, and it is a flat end; from 60 % nested it
+     * narrows like N -> F; in between, a share of each. */
+    const double share = pc->area_f > 0.0 ? pc->nested / pc->area_f : 0.0;
+    pc->weight = nb ? fmin(fmax((share - 0.4) / 0.2, 0.0), 1.0) : 0.0;
+    pc->rate = nb ? fmin((pc->area_f - pc->area_n) / hn, 0.0) : 0.0;
+    pc->power = 1.0 + pc->weight * (end_tip_power(pc->area_f, pc->area_n) - 1.0);
+  }
+  /* every cell joins the part nearest to it (breadth-first from the parts),
+   * so each part's erosion moves the field around it */
+  size_t head = 0, tail = 0;
+  for (size_t k = 0; k < n; ++k)
+    if (e->region[k] >= 0) queue[tail++] = (int32_t)k;
+  while (head < tail) {
+    const int32_t q = queue[head++];
+    const int i = q % nx, j = q / nx;
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        const int a = i + di, b = j + dj;
+        if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
+        const size_t t = (size_t)b * nx + a;
+        if (e->region[t] >= 0) continue;
+        e->region[t] = e->region[q];
+        queue[tail++] = (int32_t)t;
+      }
+  }
+  free(queue);
+  free(label_n);
+  return LSM_OK;
+}
+
+/* Raises work around each part c (the cells of its region) uniformly (an
+ * erosion, exact for a signed distance) just enough that at most target[c]
+ * of its cells stay inside: past the value of the (target+1)-th deepest
+ * (cells tied with it leave too); a part with target below 1 leaves wholly.
+ * scratch holds nx * ny floats, raise count doubles. */
+static void erode_parts(lsm_grid *work, const end_parts *e, const double *target, float *scratch,
+                        double *raise) {
+  const int nx = work->nx;
+  for (int c = 0; c < e->count; ++c) {
+    size_t count = 0;
+    for (size_t q = e->first[c]; q < e->first[c + 1]; ++q) {
+      const int32_t k = e->inside[q];
+      const float v = LSM_AT(work, k % nx, k / nx);
+      if (v <= 0.0f) scratch[count++] = v;
+    }
+    /* (targets are sums of shared areas: a rounding error must not cost a cell) */
+    const size_t keep = target[c] < 1.0 ? 0 : (size_t)floor(target[c] + 1e-6);
+    raise[c] = 0.0;
+    if (count <= keep) continue;
+    float deepest_left = scratch[0];
+    if (keep == 0) {
+      for (size_t q = 1; q < count; ++q) deepest_left = fminf(deepest_left, scratch[q]);
+      raise[c] = 1e-3 * work->dx - deepest_left;
+    } else {
+      qsort(scratch, count, sizeof *scratch, compare_float);
+      raise[c] = 1e-4 * work->dx - scratch[keep];
+    }
+  }
+  for (int j = 0; j < work->ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int32_t c = e->region[(size_t)j * nx + i];
+      if (c >= 0) LSM_AT(work, i, j) += (float)raise[c];
+    }
 }
 
 /* A gap with exactly one empty side: F's section is kept at most up to
@@ -739,6 +909,18 @@ static double end_tip_power(double area_f, double area_n) {
  *     slope taken over a short step, a pixel of alignment rounding included,
  *     would otherwise be multiplied by a long gap.  With even spacing
  *     (sigma H <= H/2 < h_N) this changes nothing.
+ *   - Parts: each 8-connected component of F's section ends on its own (two
+ *     kidneys, a paw beside a body), with the areas below counted per part:
+ *     A_F its cells, A_N the cells of N's components that overlap it (an N
+ *     component overlapping several parts shared by overlap; one that misses
+ *     F ended in the gap N -> F and says nothing here).  A part mostly
+ *     outside N (under 40 % of it inside N; 60 % and more counts whole, linear
+ *     in between) grows out toward the end, a tail or a thin part meeting a
+ *     wide body, and is a flat end: the narrowing of N's wide section is not
+ *     its own.  The erosion below runs per part, over the cells nearest to it
+ *     (meshes voxelised from npm bunny / dragon / teapot, 6 stacks every 16th:
+ *     no held-out slice left empty where the object is, 3.7 per stack before;
+ *     mean per-slice Dice 0.823 -> 0.846).
  *   - Area: cross-sections near the tip of a smooth surface shrink linearly in
  *     area (a paraboloid), so the area is capped by the line through the areas
  *     of N and F, A(sigma) = A_F - sigma H (A_N - A_F) / h_N when the object
@@ -750,8 +932,8 @@ static double end_tip_power(double area_f, double area_n) {
  *     it ends, and it is treated as a flat end; a paraboloid closing at
  *     mid-gap, the rule before, left half of each gap empty where such an
  *     object is (padded.py, a 21-slice ball every 16th: pooled Dice 0.35 ->
- *     0.84, pooled HD95 128 -> 2 px).  The shape is eroded uniformly to meet
- *     the cap.
+ *     0.84, pooled HD95 128 -> 2 px).  Each part's shape is eroded uniformly
+ *     to meet its cap.
  *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap and
  *   closes in a tip at the empty slice, a rounded one closes along its own
  *   paraboloid.  The tip: where a flat end lies inside the gap is unknown;
@@ -788,11 +970,9 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
   const double R = fmax(-(double)lsm_grid_min(full), 0.5 * full->dx);
   const double H = g->f.H;
   const int cubic = o->interp == LSM_INTERP_CUBIC;
-  const double area_f = cubic ? (double)inside_count(full) : 0.0;
-  /* dA/dz toward the end and the tip's power; with no slice N beyond F (a
-   * lone section) nothing tells how the object ends, so it is a flat end */
-  double area_rate = 0.0, tip_power = 1.0;
   double trend_reach = H; /* how far the per-cell trend is carried */
+  end_parts parts = {0, NULL, NULL, NULL, NULL};
+  double *target = NULL, *raise = NULL;
   lsm_status st = LSM_OK;
   if (cubic) {
     const size_t cells = (size_t)full->nx * (size_t)full->ny;
@@ -811,12 +991,14 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
       for (int j = 0; j < slope->ny; ++j)
         for (int i = 0; i < slope->nx; ++i)
           LSM_AT(slope, i, j) = beyond ? fmaxf((LSM_AT(full, i, j) - LSM_AT(nb, i, j)) / hn, 0.0f) : 0.0f;
-      if (beyond) {
-        const double area_n = (double)inside_count(nb);
-        area_rate = fmin((area_f - area_n) / hn, 0.0);
-        tip_power = end_tip_power(area_f, area_n);
-      }
+      /* with no slice N beyond F (a lone section) nothing tells how the object
+       * ends: every part is a flat end */
+      st = end_parts_find(full, beyond ? nb : NULL, hn, &parts, err);
     }
+    if (st == LSM_OK && !(target = lsm_alloc((size_t)parts.count + 1, sizeof *target, err, "cap parts")))
+      st = err ? err->status : LSM_ERR_NOMEM;
+    if (st == LSM_OK && !(raise = lsm_alloc((size_t)parts.count + 1, sizeof *raise, err, "cap parts")))
+      st = err ? err->status : LSM_ERR_NOMEM;
     lsm_grid_destroy(&nb);
   }
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
@@ -827,13 +1009,12 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
         for (int i = 0; i < work->nx; ++i)
           LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(slope, i, j);
       const double tip = fmin(1.0, 2.0 * (1.0 - sigma)); /* 1 up to mid-gap, 0 at the empty slice */
-      const double area =
-          fmin(fmax(area_f + sigma * H * area_rate, 0.0), area_f * pow(tip, tip_power));
-      erode_to_area(work, (size_t)floor(area), scratch);
-      if (area < 1.0) /* past the end: outside, the field stays continuous */
-        for (int j = 0; j < work->ny; ++j)
-          for (int i = 0; i < work->nx; ++i)
-            LSM_AT(work, i, j) = fmaxf(LSM_AT(work, i, j), 1e-3f * full->dx);
+      for (int c = 0; c < parts.count; ++c) {
+        const end_part *pc = &parts.part[c];
+        const double narrowing = fmax(pc->weight * pc->area_f + sigma * H * pc->rate, 0.0);
+        target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, pc->area_f * pow(tip, pc->power));
+      }
+      erode_parts(work, &parts, target, scratch, raise);
     } else {
       const float e = (float)cap_depth(o->method, R, sigma);
       for (int j = 0; j < work->ny; ++j)
@@ -844,6 +1025,9 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
     ps->slices++;
   }
   free(scratch);
+  free(target);
+  free(raise);
+  end_parts_free(&parts);
   lsm_grid_destroy(&slope);
   lsm_grid_destroy(&work);
   return st;

@@ -441,6 +441,43 @@ static void test_merge_split(void **state) {
   }
 }
 
+/* Where an object ends, each part of its last section ends its own way.  At
+ * z = 8: a disc r = 10 at x = 30 that narrows (at z = 16 it is r = sqrt(300),
+ * so the line through its two areas reaches 0 at z = 4), and a disc r = 8 at
+ * x = 75 that nothing at z = 16 continues (a lone part: a flat end); z = 0 is
+ * empty.  Cubic profile (the default): the lone disc stays whole up to
+ * mid-gap (z = 5, 6, 7), the narrowing one follows its own area line.  One
+ * area line for the whole section (the rule before) took the narrowing of
+ * the left disc for the whole section, and the right one lost its cells. */
+static void test_end_parts(void **state) {
+  (void)state;
+  const slice_def defs[3] = {{0, {{0}}},
+                             {2, {disc(30, C, 10), disc(75, C, 8)}},
+                             {1, {disc(30, C, sqrt(300.0))}}};
+  const double z[3] = {0, 8, 16};
+  lsm_stack_opts o;
+  default_opts(&o);
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 3, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 17);
+  size_t left[17], right[17];
+  for (int k = 0; k <= 16; ++k) {
+    left[k] = right[k] = 0;
+    for (int p = 0; p < W * H; ++p)
+      if (r.sink.s[k].phi[p] <= 0.0f) ++*(p % W < 52 ? &left[k] : &right[k]);
+  }
+  print_message("end parts: left (narrowing) at z = 4..8: %zu %zu %zu %zu %zu; right (lone): %zu %zu %zu %zu %zu\n",
+                left[4], left[5], left[6], left[7], left[8], right[4], right[5], right[6], right[7], right[8]);
+  assert_int_equal(right[16], 0);
+  for (int k = 5; k <= 7; ++k) {
+    assert_int_equal(right[k], right[8]);
+    const double line = (double)left[8] - (8.0 - k) * ((double)left[16] - (double)left[8]) / 8.0;
+    assert_true((double)left[k] <= line && (double)left[k] >= 0.85 * line - 4.0);
+  }
+  assert_true(left[3] == 0 && right[3] > 0); /* the lone disc's tip goes on */
+  sink_free(&r.sink);
+}
+
 /* A disc next to an empty slice, with no slice beyond it (a lone section).
  * Linear profile: the object closes by mid-gap.  Vanishing (disc at z = 0,
  * empty at z = 10): areas strictly decrease while non-empty, the last
@@ -846,6 +883,7 @@ int main(void) {
       cmocka_unit_test(test_cone_blend),
       cmocka_unit_test(test_output_heights),
       cmocka_unit_test(test_merge_split),
+      cmocka_unit_test(test_end_parts),
       cmocka_unit_test(test_vanish_appear),
       cmocka_unit_test(test_align),
       cmocka_unit_test(test_align_auto_growth),
