@@ -546,7 +546,8 @@ static double end_depth(const lsm_grid *phi) {
 static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err) {
   const lsm_stack_opts *o = r->opts;
   lsm_grid *outer[2] = {NULL, NULL}; /* secants beyond A (prev -> A) and beyond B (B -> next) */
-  float h_outer[2] = {1.0f, 1.0f};
+  int end[2] = {0, 0};               /* that neighbour is an empty slice */
+  float end_secant[2] = {0.0f, 0.0f}, h_outer[2] = {1.0f, 1.0f};
   LSM_TRY(lsm_grid_clone(g->phi_a, &g->slope_a, err));
   LSM_TRY(lsm_grid_clone(g->phi_a, &g->slope_b, err));
   const float H = (float)g->f.H;
@@ -557,13 +558,14 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
     const lsm_grid *own = side ? g->phi_b : g->phi_a;
     const float h = (float)fabs(w->z[k] - w->z[kf]);
     h_outer[side] = h;
-    if ((st = lsm_grid_clone(g->phi_a, &outer[side], err)) != LSM_OK) break;
-    lsm_grid *sec = outer[side];
     if (w->s[k]->empty) {
       const float R = (float)end_depth(own);
-      lsm_grid_fill(sec, side ? R / h : -R / h);
+      end[side] = 1;
+      end_secant[side] = side ? R / h : -R / h;
       continue;
     }
+    if ((st = lsm_grid_clone(g->phi_a, &outer[side], err)) != LSM_OK) break;
+    lsm_grid *sec = outer[side];
     st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], sec, err);
     for (int j = 0; st == LSM_OK && j < sec->ny; ++j)
       for (int i = 0; i < sec->nx; ++i) {
@@ -573,18 +575,19 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
   }
   for (int side = 0; side < 2 && st == LSM_OK; ++side) {
     lsm_grid *m = side ? g->slope_b : g->slope_a;
-    const lsm_grid *mine = outer[side], *other = outer[1 - side];
+    const int other = 1 - side;
     for (int j = 0; j < m->ny; ++j)
       for (int i = 0; i < m->nx; ++i) {
         const float d = (LSM_AT(g->phi_b, i, j) - LSM_AT(g->phi_a, i, j)) / H;
         float *pm = &LSM_AT(m, i, j);
-        if (mine && w->s[side ? 3 : 0]->empty) /* as the end gap continues it */
-          *pm = (side ? d > 0.0f : d < 0.0f) ? d : 0.0f;
-        else if (mine)
-          *pm = side ? pchip_slope(H, h_outer[1], d, LSM_AT(mine, i, j))
-                     : pchip_slope(h_outer[0], H, LSM_AT(mine, i, j), d);
-        else if (other)
-          *pm = pchip_edge_slope(H, h_outer[1 - side], d, LSM_AT(other, i, j));
+        if (end[side]) /* as the end gap continues it: only shrinking toward the end */
+          *pm = side ? fmaxf(d, 0.0f) : fminf(d, 0.0f);
+        else if (outer[side])
+          *pm = side ? pchip_slope(H, h_outer[1], d, LSM_AT(outer[1], i, j))
+                     : pchip_slope(h_outer[0], H, LSM_AT(outer[0], i, j), d);
+        else if (outer[other] || end[other])
+          *pm = pchip_edge_slope(H, h_outer[other], d,
+                                 outer[other] ? LSM_AT(outer[other], i, j) : end_secant[other]);
         else
           *pm = d;
       }
