@@ -8,6 +8,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "lsm_ends.h"
 #include "lsm_parts.h"
 #include "lsm_register.h"
 #include "lsm_sdf.h"
@@ -518,11 +519,6 @@ static void gap_paste_parts(const gap *g, double s, float *out) {
   }
 }
 
-/* The largest depth R of a non-empty slice's field (at least half a cell). */
-static double end_depth(const lsm_grid *phi) {
-  return fmax(-(double)lsm_grid_min(phi), 0.5 * phi->dx);
-}
-
 /* Per-pixel PCHIP slopes at A and B, from the secants of the gap and of the
  * intervals beyond A and B:
  *   - a non-empty neighbour gives its secant (Fritsch-Carlson slope);
@@ -559,7 +555,7 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
     const float h = (float)fabs(w->z[k] - w->z[kf]);
     h_outer[side] = h;
     if (w->s[k]->empty) {
-      const float R = (float)end_depth(own);
+      const float R = (float)lsm_end_depth(own);
       end[side] = 1;
       end_secant[side] = side ? R / h : -R / h;
       continue;
@@ -693,9 +689,8 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   }
   if (a->empty != b->empty) {
     lsm_grid *full = a->empty ? g->phi_b : g->phi_a, *none = a->empty ? g->phi_a : g->phi_b;
-    double depth = -(double)lsm_grid_min(full);
-    if (depth < 0.5 * h) depth = 0.5 * h;
-    double c = o->method == LSM_METHOD_BLEND ? depth : depth / log(2.0);
+    const double depth = lsm_end_depth(full);
+    const double c = o->method == LSM_METHOD_BLEND ? depth : depth / log(2.0);
     lsm_grid_fill(none, (float)c);
   }
   return LSM_OK;
@@ -722,366 +717,38 @@ static void gap_add_cubic(const gap *g, double s, lsm_grid *field) {
   }
 }
 
-/* Erosion depth of the object at fraction sigma of a gap that runs from a
- * non-empty slice (sigma = 0, deepest point at depth R) to an empty one.
- * ls:    a paraboloid cap, radius R sqrt(1 - 2 sigma): cross-sections of a smooth
- *        closed surface near its tip shrink like this, and the cap closes at
- *        sigma = 1/2 (the halfway rule).
- * blend: the zero set of (1 - sigma) phi + sigma R, i.e. depth R sigma / (1 - sigma). */
-static double cap_depth(lsm_method method, double R, double sigma) {
-  if (sigma >= 0.5) return R * (1.0 + 1e-6) + 1e-6;
-  if (method == LSM_METHOD_BLEND) return R * sigma / (1.0 - sigma);
-  return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
-}
-
-static int compare_float(const void *x, const void *y) {
-  const float a = *(const float *)x, b = *(const float *)y;
-  return (a > b) - (a < b);
-}
-
-/* One 8-connected component of F's section where the object ends (a gap
- * with one empty side, cubic profile), and how it ends. */
-typedef struct end_part {
-  double area_f;  /* its cells */
-  double area_n;  /* cells of N's components that go on into it (shared by overlap) */
-  double nested;  /* its cells inside N */
-  double weight;  /* share of it that narrows like N -> F; the rest is a flat end */
-  double rate;    /* dA/dz of that share toward the end, <= 0 (cells per unit z) */
-  double power;   /* exponent p of its tip past mid-gap */
-} end_part;
-
-typedef struct end_parts {
-  int count;
-  int32_t *region; /* per cell: the part it lies in or is nearest to (8-connected steps) */
-  size_t *first;   /* count + 1 offsets into inside: part c's cells of F */
-  int32_t *inside; /* F's inside cells, grouped by part */
-  end_part *part;
-} end_parts;
-
-static void end_parts_free(end_parts *e) {
-  free(e->region);
-  free(e->first);
-  free(e->inside);
-  free(e->part);
-  memset(e, 0, sizeof *e);
-}
-
-/* Breadth-first spread of labels: each cell of queue[0 .. tail) passes its
- * label to its unlabelled 8-neighbours (those with phi <= 0 only, unless phi
- * is NULL), and they to theirs.  queue holds nx * ny cells. */
-static void spread_labels(const lsm_grid *phi, int nx, int ny, int32_t *label, int32_t *queue,
-                          size_t tail) {
-  for (size_t head = 0; head < tail;) {
-    const int32_t q = queue[head++];
-    const int i = q % nx, j = q / nx;
-    for (int dj = -1; dj <= 1; ++dj)
-      for (int di = -1; di <= 1; ++di) {
-        const int a = i + di, b = j + dj;
-        if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
-        const size_t t = (size_t)b * nx + a;
-        if (label[t] >= 0 || (phi && LSM_AT(phi, a, b) > 0.0f)) continue;
-        label[t] = label[q];
-        queue[tail++] = (int32_t)t;
-      }
-  }
-}
-
-/* Labels the 8-connected components of {phi <= 0}: label[cell] = component
- * (or -1); returns the count.  queue: nx * ny. */
-static int32_t label_components(const lsm_grid *phi, int32_t *label, int32_t *queue) {
-  const int nx = phi->nx, ny = phi->ny;
-  const size_t n = (size_t)nx * (size_t)ny;
-  for (size_t k = 0; k < n; ++k) label[k] = -1;
-  int32_t count = 0;
-  for (int j0 = 0; j0 < ny; ++j0)
-    for (int i0 = 0; i0 < nx; ++i0) {
-      const size_t start = (size_t)j0 * nx + i0;
-      if (label[start] >= 0 || LSM_AT(phi, i0, j0) > 0.0f) continue;
-      label[start] = count++;
-      queue[0] = (int32_t)start;
-      spread_labels(phi, nx, ny, label, queue, 1);
-    }
-  return count;
-}
-
-/* Exponent p of the tip past mid-gap, area A_F (2 (1 - sigma))^p, from the
- * areas of F and of N, the slice beyond it.  A section that narrows toward
- * the end by 10 % or more closes like a cone (p = 2: the radius falls
- * linearly); one that keeps its size or grows (a flat end: the base of a
- * scanned mesh, a cut organ) gives no hint of where the object stops inside
- * the gap, and its area falls linearly (p = 1); p is linear in between. */
-static double end_tip_power(double area_f, double area_n) {
-  const double narrowing = area_f > 0.0 ? (area_n - area_f) / area_f : 1.0;
-  const double cone_from = 0.1; /* narrowing at which the tip is a cone */
-  return 1.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
-}
-
-/* F's components and how each ends (see run_gap_cap).  nb: N's field in F's
- * frame, or NULL (no slice beyond F: every part is a flat end); hn: the
- * height from N to F. */
-static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, double hn,
-                                 end_parts *e, lsm_err *err) {
-  memset(e, 0, sizeof *e);
-  const int nx = full->nx, ny = full->ny;
-  const size_t n = (size_t)nx * (size_t)ny;
-  int32_t *queue = lsm_alloc(n, sizeof *queue, err, "end components");
-  int32_t *label_n = queue ? lsm_alloc(n, sizeof *label_n, err, "end components") : NULL;
-  e->region = label_n ? lsm_alloc(n, sizeof *e->region, err, "end components") : NULL;
-  if (!e->region) {
-    free(queue);
-    free(label_n);
-    return err ? err->status : LSM_ERR_NOMEM;
-  }
-  e->count = label_components(full, e->region, queue);
-  const int m = e->count;
-  e->part = lsm_alloc((size_t)m + 1, sizeof *e->part, err, "end components");
-  e->first = e->part ? lsm_alloc((size_t)m + 2, sizeof *e->first, err, "end components") : NULL;
-  size_t inside = 0;
-  for (size_t k = 0; k < n; ++k) inside += e->region[k] >= 0;
-  e->inside = e->first ? lsm_alloc(inside + 1, sizeof *e->inside, err, "end components") : NULL;
-  if (!e->inside) {
-    free(queue);
-    free(label_n);
-    end_parts_free(e);
-    return err ? err->status : LSM_ERR_NOMEM;
-  }
-  memset(e->part, 0, ((size_t)m + 1) * sizeof *e->part);
-  memset(e->first, 0, ((size_t)m + 2) * sizeof *e->first);
-  /* F's inside cells grouped by part (a counting sort) */
-  for (size_t k = 0; k < n; ++k)
-    if (e->region[k] >= 0) e->first[e->region[k] + 1]++;
-  for (int c = 0; c < m; ++c) {
-    e->part[c].area_f = (double)e->first[c + 1];
-    e->first[c + 1] += e->first[c];
-  }
-  for (size_t k = 0, *fill = e->first; k < n; ++k)
-    if (e->region[k] >= 0) e->inside[fill[e->region[k]]++] = (int32_t)k;
-  for (int c = m; c > 0; --c) e->first[c] = e->first[c - 1]; /* fill advanced each start */
-  e->first[0] = 0;
-  if (nb) {
-    /* each component of N that overlaps F gives its area to the parts it
-     * overlaps, in proportion to the overlap; one that misses F ends in the
-     * gap N -> F and says nothing about how F ends */
-    const int32_t mn = label_components(nb, label_n, queue);
-    double *n_area = lsm_alloc((size_t)mn + 1, sizeof *n_area, err, "end components");
-    double *n_hits = n_area ? lsm_alloc((size_t)mn + 1, sizeof *n_hits, err, "end components") : NULL;
-    if (!n_hits) {
-      free(n_area);
-      free(queue);
-      free(label_n);
-      end_parts_free(e);
-      return err ? err->status : LSM_ERR_NOMEM;
-    }
-    memset(n_area, 0, ((size_t)mn + 1) * sizeof *n_area);
-    memset(n_hits, 0, ((size_t)mn + 1) * sizeof *n_hits);
-    for (size_t k = 0; k < n; ++k)
-      if (label_n[k] >= 0) {
-        n_area[label_n[k]] += 1.0;
-        if (e->region[k] >= 0) n_hits[label_n[k]] += 1.0;
-      }
-    for (size_t k = 0; k < n; ++k)
-      if (label_n[k] >= 0 && e->region[k] >= 0) {
-        end_part *pc = &e->part[e->region[k]];
-        pc->nested += 1.0;
-        pc->area_n += n_area[label_n[k]] / n_hits[label_n[k]];
-      }
-    free(n_area);
-    free(n_hits);
-  }
-  for (int c = 0; c < m; ++c) {
-    end_part *pc = &e->part[c];
-    /* A part mostly outside N (less than 40 % nested) grows out toward the
-     * end (a tail, a paw, a thin part meeting a wide body): N's area says
-     * nothing of how it stops, and it is a flat end; from 60 % nested it
-     * narrows like N -> F; in between, a share of each. */
-    const double share = pc->area_f > 0.0 ? pc->nested / pc->area_f : 0.0;
-    pc->weight = nb ? fmin(fmax((share - 0.4) / 0.2, 0.0), 1.0) : 0.0;
-    pc->rate = nb ? fmin((pc->area_f - pc->area_n) / hn, 0.0) : 0.0;
-    pc->power = 1.0 + pc->weight * (end_tip_power(pc->area_f, pc->area_n) - 1.0);
-  }
-  /* every cell joins the part nearest to it (breadth-first from the parts),
-   * so each part's erosion moves the field around it */
-  size_t tail = 0;
-  for (size_t k = 0; k < n; ++k)
-    if (e->region[k] >= 0) queue[tail++] = (int32_t)k;
-  spread_labels(NULL, nx, ny, e->region, queue, tail);
-  free(queue);
-  free(label_n);
-  return LSM_OK;
-}
-
-/* Raises work around each part c (the cells of its region) uniformly (an
- * erosion, exact for a signed distance) just enough that at most target[c]
- * of its cells stay inside: past the value of the (target+1)-th deepest
- * (cells tied with it leave too); a part with target below 1 leaves wholly.
- * scratch holds nx * ny floats, raise count doubles. */
-static void erode_parts(lsm_grid *work, const end_parts *e, const double *target, float *scratch,
-                        double *raise) {
-  const int nx = work->nx;
-  for (int c = 0; c < e->count; ++c) {
-    size_t count = 0;
-    for (size_t q = e->first[c]; q < e->first[c + 1]; ++q) {
-      const int32_t k = e->inside[q];
-      const float v = LSM_AT(work, k % nx, k / nx);
-      if (v <= 0.0f) scratch[count++] = v;
-    }
-    /* (targets are sums of shared areas: a rounding error must not cost a cell) */
-    const size_t keep = target[c] < 1.0 ? 0 : (size_t)floor(target[c] + 1e-6);
-    raise[c] = 0.0;
-    if (count <= keep) continue;
-    float deepest_left = scratch[0];
-    if (keep == 0) {
-      for (size_t q = 1; q < count; ++q) deepest_left = fminf(deepest_left, scratch[q]);
-      raise[c] = 1e-3 * work->dx - deepest_left;
-    } else {
-      qsort(scratch, count, sizeof *scratch, compare_float);
-      raise[c] = 1e-4 * work->dx - scratch[keep];
-    }
-  }
-  for (int j = 0; j < work->ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const int32_t c = e->region[(size_t)j * nx + i];
-      if (c >= 0) LSM_AT(work, i, j) += (float)raise[c];
-    }
-}
-
-/* A gap with exactly one empty side: F's section is kept at most up to
- * mid-gap, and in between the object is F eroded; phi + e is the exact
- * level-set solution of a uniform inward motion by e, so no PDE is needed.
- * Linear profile: a uniform erosion by cap_depth (only the pair is seen); the
- * object ends at mid-gap (sigma >= 1/2 is empty).
- * Cubic profile: the end continues what the slices above it were doing.
- *   - Shape: per cell, phi_F + sigma H max(m, 0), m = (phi_F - phi_N) / h_N the
- *     z-slope of phi from the slice N beyond F (in that pair's frame, which
- *     also keeps moving: frame_setup).  This is the slope the spline on the
- *     other side of F ends with, so the surface is C1 across F wherever the
- *     shape shrinks toward its end; where it grows toward the end it is held
- *     at F (nothing grows past the last slice).  The trend is carried at most
- *     h_N past F (no farther than it was measured): with uneven heights a
- *     slope taken over a short step, a pixel of alignment rounding included,
- *     would otherwise be multiplied by a long gap.  With even spacing
- *     (sigma H <= H/2 < h_N) this changes nothing.
- *   - Parts: each 8-connected component of F's section ends on its own (two
- *     kidneys, a paw beside a body), with the areas below counted per part:
- *     A_F its cells, A_N the cells of N's components that overlap it (an N
- *     component overlapping several parts shared by overlap; one that misses
- *     F ended in the gap N -> F and says nothing here).  A part mostly
- *     outside N (under 40 % of it inside N; 60 % and more counts whole, linear
- *     in between) grows out toward the end, a tail or a thin part meeting a
- *     wide body, and is a flat end: the narrowing of N's wide section is not
- *     its own.  The erosion below runs per part, over the cells nearest to it
- *     (meshes voxelised from npm bunny / dragon / teapot, 6 stacks every 16th:
- *     no held-out slice left empty where the object is, 3.7 per stack before;
- *     mean per-slice Dice 0.823 -> 0.846).
- *   - Area: cross-sections near the tip of a smooth surface shrink linearly in
- *     area (a paraboloid), so the area is capped by the line through the areas
- *     of N and F, A(sigma) = A_F - sigma H (A_N - A_F) / h_N when the object
- *     narrows toward its end (A_F otherwise); past mid-gap also by
- *     A_F (2 (1 - sigma))^p, a tip closing at the empty slice, p = 2 (a cone)
- *     where the section narrows toward the end and p = 1 (area falling
- *     linearly) where it does not (end_tip_power).  With no slice beyond F (a
- *     lone section: an object shorter than about two gaps) nothing tells how
- *     it ends, and it is treated as a flat end; a paraboloid closing at
- *     mid-gap, the rule before, left half of each gap empty where such an
- *     object is (padded.py, a 21-slice ball every 16th: pooled Dice 0.35 ->
- *     0.84, pooled HD95 128 -> 2 px).  Each part's shape is eroded uniformly
- *     to meet its cap.
- *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap and
- *   closes in a tip at the empty slice, a rounded one closes along its own
- *   paraboloid.  The tip: where a flat end lies inside the gap is unknown;
- *   mid-gap is the median, but a slice left empty where the object is present
- *   costs the pooled 95 % Hausdorff distance the image size for its whole
- *   outline, and an object cut one slice above the empty slice loses half a
- *   gap.  validation/padded.py (10 shapes cut to the object plus one empty
- *   slice, every 8th / 16th): pooled Dice 0.9654 -> 0.9776 / 0.9243 -> 0.9499,
- *   pooled HD95 13.7 -> 1.8 / 52.5 -> 6.0 px (a cone tip at every end: 0.9749
- *   / 2.6 px, 0.9452 / 7.5 px); end_offsets.py (ends at every offset, 14
- *   shapes, strides 4, 8, 16): pooled Dice 0.9517 -> 0.9476, pooled HD95 11.4
- *   -> 16.0 px (cone tip: 0.9496, 15.2 px), the price of the tip when the end
- *   is equally likely anywhere.  Before that, the area cap was chosen over
- *   the previous rule (the monotone cubic through N, F and a virtual slice
- *   phi_F + R at the empty one, R the largest depth, with the end held in
- *   place) with
- *   validation/end_offsets.py, which places the object's ends at every offset
- *   inside a gap: over 13 shapes at strides 4, 8 and 16 the mean per-slice
- *   Dice goes from 0.905 to 0.917 and the mean HD95 from 1.24 to 1.12 px on
- *   average; pooled Dice rises in 33 of the 39 cases (ball every 16th 0.9807 ->
- *   0.9817, cylinder 0.9441 -> 0.9517, slanted tube 0.8826 -> 0.9355) and falls
- *   for a 7 px ball (0.9399 -> 0.9372) and a torus (0.9204 -> 0.9183) every
- *   16th, where the area line through slices 16 apart overestimates a strongly
- *   curved end, and by <= 0.0015 for two diverging tubes. */
+/* A gap with exactly one empty side: the object ends inside it (lsm_ends),
+ * in the frame of the pair, which keeps moving at the N -> F centroid
+ * velocity when that pair is aligned (frame_setup). */
 static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty,
                               const double *zs, const double *fs, size_t n, lsm_pair_stats *ps,
                               lsm_err *err) {
   const lsm_stack_opts *o = r->opts;
   const lsm_grid *full = a_empty ? g->phi_b : g->phi_a;
   const int kn = a_empty ? 3 : 0, kf = a_empty ? 2 : 1; /* beyond, and the full slice */
-  lsm_grid *work = NULL, *slope = NULL, *nb = NULL;
-  float *scratch = NULL;
+  const lsm_end_profile profile = o->interp == LSM_INTERP_CUBIC ? LSM_END_TREND
+                                  : o->method == LSM_METHOD_BLEND ? LSM_END_BLEND
+                                                                  : LSM_END_PARABOLOID;
+  lsm_grid *work = NULL, *beyond = NULL;
+  lsm_end *end = NULL;
   LSM_TRY(lsm_grid_clone(full, &work, err));
-  const double R = end_depth(full);
-  const double H = g->f.H;
-  const int cubic = o->interp == LSM_INTERP_CUBIC;
-  double trend_reach = H; /* how far the per-cell trend is carried */
-  end_parts parts = {0, NULL, NULL, NULL, NULL};
-  double *target = NULL, *raise = NULL;
   lsm_status st = LSM_OK;
-  if (cubic) {
-    const size_t cells = (size_t)full->nx * (size_t)full->ny;
-    st = lsm_grid_clone(full, &slope, err);
-    if (st == LSM_OK && !(scratch = lsm_alloc(cells, sizeof *scratch, err, "cap cells")))
-      st = err ? err->status : LSM_ERR_NOMEM;
-    const int beyond = window_usable(w, kn);
-    if (st == LSM_OK && beyond) {
-      st = lsm_grid_clone(full, &nb, err);
-      if (st == LSM_OK)
-        st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn], nb, err);
-    }
-    if (st == LSM_OK) {
-      const float hn = beyond ? (float)fabs(w->z[kn] - w->z[kf]) : 1.0f;
-      trend_reach = hn;
-      for (int j = 0; j < slope->ny; ++j)
-        for (int i = 0; i < slope->nx; ++i)
-          LSM_AT(slope, i, j) =
-              beyond ? fmaxf((LSM_AT(full, i, j) - LSM_AT(nb, i, j)) / hn, 0.0f) : 0.0f;
-      /* with no slice N beyond F (a lone section) nothing tells how the object
-       * ends: every part is a flat end */
-      st = end_parts_find(full, beyond ? nb : NULL, hn, &parts, err);
-    }
-    if (st == LSM_OK && !(target = lsm_alloc((size_t)parts.count + 1, sizeof *target, err, "cap parts")))
-      st = err ? err->status : LSM_ERR_NOMEM;
-    if (st == LSM_OK && !(raise = lsm_alloc((size_t)parts.count + 1, sizeof *raise, err, "cap parts")))
-      st = err ? err->status : LSM_ERR_NOMEM;
-    lsm_grid_destroy(&nb);
+  if (profile == LSM_END_TREND && window_usable(w, kn)) {
+    st = lsm_grid_clone(full, &beyond, err);
+    if (st == LSM_OK)
+      st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn], beyond,
+                     err);
   }
+  if (st == LSM_OK)
+    st = lsm_end_create(full, beyond, fabs(w->z[kn] - w->z[kf]), g->f.H, profile, &end, err);
+  lsm_grid_destroy(&beyond);
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
-    const double sigma = a_empty ? 1.0 - fs[k] : fs[k];
-    if (cubic) {
-      const float rise = (float)fmin(sigma * H, trend_reach);
-      for (int j = 0; j < work->ny; ++j)
-        for (int i = 0; i < work->nx; ++i)
-          LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(slope, i, j);
-      const double tip = fmin(1.0, 2.0 * (1.0 - sigma)); /* 1 up to mid-gap, 0 at the empty slice */
-      for (int c = 0; c < parts.count; ++c) {
-        const end_part *pc = &parts.part[c];
-        const double narrowing = fmax(pc->weight * pc->area_f + sigma * H * pc->rate, 0.0);
-        target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, pc->area_f * pow(tip, pc->power));
-      }
-      erode_parts(work, &parts, target, scratch, raise);
-    } else {
-      const float e = (float)cap_depth(o->method, R, sigma);
-      for (int j = 0; j < work->ny; ++j)
-        for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + e;
-    }
+    lsm_end_at(end, a_empty ? 1.0 - fs[k] : fs[k], work);
     frame_extract(&g->f, work, fs[k], r->out);
     st = emit(r, zs[k], -1, err);
     ps->slices++;
   }
-  free(scratch);
-  free(target);
-  free(raise);
-  end_parts_free(&parts);
-  lsm_grid_destroy(&slope);
+  lsm_end_destroy(&end);
   lsm_grid_destroy(&work);
   return st;
 }

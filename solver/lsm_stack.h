@@ -38,7 +38,8 @@
  * (1-s) phi_A + s R for the blend, R the depth of A's deepest point; per
  * iteration the morph toward the constant R / ln 2).  With the cubic profile
  * the end follows the trend of the slices before A, and a section still whole
- * at mid-gap closes in a tip at the empty slice (README, method item 7).
+ * at mid-gap closes in a tip at the empty slice (lsm_ends.h; README, method
+ * item 7).
  */
 #ifndef LSM_STACK_H
 #define LSM_STACK_H

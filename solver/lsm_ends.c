@@ -1,0 +1,319 @@
+/* lsm_ends: how an object ends inside a gap whose far side is an empty slice
+ * (see the header for the rule and its measurements). */
+#include "lsm_ends.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int compare_float(const void *x, const void *y) {
+  const float a = *(const float *)x, b = *(const float *)y;
+  return (a > b) - (a < b);
+}
+
+/* One 8-connected component of F's section where the object ends (a gap
+ * with one empty side, cubic profile), and how it ends. */
+typedef struct end_part {
+  double area_f;  /* its cells */
+  double area_n;  /* cells of N's components that go on into it (shared by overlap) */
+  double nested;  /* its cells inside N */
+  double weight;  /* share of it that narrows like N -> F; the rest is a flat end */
+  double rate;    /* dA/dz of that share toward the end, <= 0 (cells per unit z) */
+  double power;   /* exponent p of its tip past mid-gap */
+} end_part;
+
+typedef struct end_parts {
+  int count;
+  int32_t *region; /* per cell: the part it lies in or is nearest to (8-connected steps) */
+  size_t *first;   /* count + 1 offsets into inside: part c's cells of F */
+  int32_t *inside; /* F's inside cells, grouped by part */
+  end_part *part;
+} end_parts;
+
+static void end_parts_free(end_parts *e) {
+  free(e->region);
+  free(e->first);
+  free(e->inside);
+  free(e->part);
+  memset(e, 0, sizeof *e);
+}
+
+/* Breadth-first spread of labels: each cell of queue[0 .. tail) passes its
+ * label to its unlabelled 8-neighbours (those with phi <= 0 only, unless phi
+ * is NULL), and they to theirs.  queue holds nx * ny cells. */
+static void spread_labels(const lsm_grid *phi, int nx, int ny, int32_t *label, int32_t *queue,
+                          size_t tail) {
+  for (size_t head = 0; head < tail;) {
+    const int32_t q = queue[head++];
+    const int i = q % nx, j = q / nx;
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        const int a = i + di, b = j + dj;
+        if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
+        const size_t t = (size_t)b * nx + a;
+        if (label[t] >= 0 || (phi && LSM_AT(phi, a, b) > 0.0f)) continue;
+        label[t] = label[q];
+        queue[tail++] = (int32_t)t;
+      }
+  }
+}
+
+/* Labels the 8-connected components of {phi <= 0}: label[cell] = component
+ * (or -1); returns the count.  queue: nx * ny. */
+static int32_t label_components(const lsm_grid *phi, int32_t *label, int32_t *queue) {
+  const int nx = phi->nx, ny = phi->ny;
+  const size_t n = (size_t)nx * (size_t)ny;
+  for (size_t k = 0; k < n; ++k) label[k] = -1;
+  int32_t count = 0;
+  for (int j0 = 0; j0 < ny; ++j0)
+    for (int i0 = 0; i0 < nx; ++i0) {
+      const size_t start = (size_t)j0 * nx + i0;
+      if (label[start] >= 0 || LSM_AT(phi, i0, j0) > 0.0f) continue;
+      label[start] = count++;
+      queue[0] = (int32_t)start;
+      spread_labels(phi, nx, ny, label, queue, 1);
+    }
+  return count;
+}
+
+/* Exponent p of the tip past mid-gap, area A_F (2 (1 - sigma))^p, from the
+ * areas of F and of N, the slice beyond it.  A section that narrows toward
+ * the end by 10 % or more closes like a cone (p = 2: the radius falls
+ * linearly); one that keeps its size or grows (a flat end: the base of a
+ * scanned mesh, a cut organ) gives no hint of where the object stops inside
+ * the gap, and its area falls linearly (p = 1); p is linear in between. */
+static double end_tip_power(double area_f, double area_n) {
+  const double narrowing = area_f > 0.0 ? (area_n - area_f) / area_f : 1.0;
+  const double cone_from = 0.1; /* narrowing at which the tip is a cone */
+  return 1.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
+}
+
+/* F's components and how each ends (see the header).  nb: N's field in F's
+ * frame, or NULL (no slice beyond F: every part is a flat end); hn: the
+ * height from N to F. */
+static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, double hn,
+                                 end_parts *e, lsm_err *err) {
+  memset(e, 0, sizeof *e);
+  const int nx = full->nx, ny = full->ny;
+  const size_t n = (size_t)nx * (size_t)ny;
+  int32_t *queue = lsm_alloc(n, sizeof *queue, err, "end components");
+  int32_t *label_n = queue ? lsm_alloc(n, sizeof *label_n, err, "end components") : NULL;
+  e->region = label_n ? lsm_alloc(n, sizeof *e->region, err, "end components") : NULL;
+  if (!e->region) {
+    free(queue);
+    free(label_n);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  e->count = label_components(full, e->region, queue);
+  const int m = e->count;
+  e->part = lsm_alloc((size_t)m + 1, sizeof *e->part, err, "end components");
+  e->first = e->part ? lsm_alloc((size_t)m + 2, sizeof *e->first, err, "end components") : NULL;
+  size_t inside = 0;
+  for (size_t k = 0; k < n; ++k) inside += e->region[k] >= 0;
+  e->inside = e->first ? lsm_alloc(inside + 1, sizeof *e->inside, err, "end components") : NULL;
+  if (!e->inside) {
+    free(queue);
+    free(label_n);
+    end_parts_free(e);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  memset(e->part, 0, ((size_t)m + 1) * sizeof *e->part);
+  memset(e->first, 0, ((size_t)m + 2) * sizeof *e->first);
+  /* F's inside cells grouped by part (a counting sort) */
+  for (size_t k = 0; k < n; ++k)
+    if (e->region[k] >= 0) e->first[e->region[k] + 1]++;
+  for (int c = 0; c < m; ++c) {
+    e->part[c].area_f = (double)e->first[c + 1];
+    e->first[c + 1] += e->first[c];
+  }
+  for (size_t k = 0, *fill = e->first; k < n; ++k)
+    if (e->region[k] >= 0) e->inside[fill[e->region[k]]++] = (int32_t)k;
+  for (int c = m; c > 0; --c) e->first[c] = e->first[c - 1]; /* fill advanced each start */
+  e->first[0] = 0;
+  if (nb) {
+    /* each component of N that overlaps F gives its area to the parts it
+     * overlaps, in proportion to the overlap; one that misses F ends in the
+     * gap N -> F and says nothing about how F ends */
+    const int32_t mn = label_components(nb, label_n, queue);
+    double *n_area = lsm_alloc((size_t)mn + 1, sizeof *n_area, err, "end components");
+    double *n_hits = n_area ? lsm_alloc((size_t)mn + 1, sizeof *n_hits, err, "end components") : NULL;
+    if (!n_hits) {
+      free(n_area);
+      free(queue);
+      free(label_n);
+      end_parts_free(e);
+      return err ? err->status : LSM_ERR_NOMEM;
+    }
+    memset(n_area, 0, ((size_t)mn + 1) * sizeof *n_area);
+    memset(n_hits, 0, ((size_t)mn + 1) * sizeof *n_hits);
+    for (size_t k = 0; k < n; ++k)
+      if (label_n[k] >= 0) {
+        n_area[label_n[k]] += 1.0;
+        if (e->region[k] >= 0) n_hits[label_n[k]] += 1.0;
+      }
+    for (size_t k = 0; k < n; ++k)
+      if (label_n[k] >= 0 && e->region[k] >= 0) {
+        end_part *pc = &e->part[e->region[k]];
+        pc->nested += 1.0;
+        pc->area_n += n_area[label_n[k]] / n_hits[label_n[k]];
+      }
+    free(n_area);
+    free(n_hits);
+  }
+  for (int c = 0; c < m; ++c) {
+    end_part *pc = &e->part[c];
+    /* A part mostly outside N (less than 40 % nested) grows out toward the
+     * end (a tail, a paw, a thin part meeting a wide body): N's area says
+     * nothing of how it stops, and it is a flat end; from 60 % nested it
+     * narrows like N -> F; in between, a share of each. */
+    const double share = pc->area_f > 0.0 ? pc->nested / pc->area_f : 0.0;
+    pc->weight = nb ? fmin(fmax((share - 0.4) / 0.2, 0.0), 1.0) : 0.0;
+    pc->rate = nb ? fmin((pc->area_f - pc->area_n) / hn, 0.0) : 0.0;
+    pc->power = 1.0 + pc->weight * (end_tip_power(pc->area_f, pc->area_n) - 1.0);
+  }
+  /* every cell joins the part nearest to it (breadth-first from the parts),
+   * so each part's erosion moves the field around it */
+  size_t tail = 0;
+  for (size_t k = 0; k < n; ++k)
+    if (e->region[k] >= 0) queue[tail++] = (int32_t)k;
+  spread_labels(NULL, nx, ny, e->region, queue, tail);
+  free(queue);
+  free(label_n);
+  return LSM_OK;
+}
+
+/* Raises work around each part c (the cells of its region) uniformly (an
+ * erosion, exact for a signed distance) just enough that at most target[c]
+ * of its cells stay inside: past the value of the (target+1)-th deepest
+ * (cells tied with it leave too); a part with target below 1 leaves wholly.
+ * scratch holds nx * ny floats, raise count doubles. */
+static void erode_parts(lsm_grid *work, const end_parts *e, const double *target, float *scratch,
+                        double *raise) {
+  const int nx = work->nx;
+  for (int c = 0; c < e->count; ++c) {
+    size_t count = 0;
+    for (size_t q = e->first[c]; q < e->first[c + 1]; ++q) {
+      const int32_t k = e->inside[q];
+      const float v = LSM_AT(work, k % nx, k / nx);
+      if (v <= 0.0f) scratch[count++] = v;
+    }
+    /* (targets are sums of shared areas: a rounding error must not cost a cell) */
+    const size_t keep = target[c] < 1.0 ? 0 : (size_t)floor(target[c] + 1e-6);
+    raise[c] = 0.0;
+    if (count <= keep) continue;
+    float deepest_left = scratch[0];
+    if (keep == 0) {
+      for (size_t q = 1; q < count; ++q) deepest_left = fminf(deepest_left, scratch[q]);
+      raise[c] = 1e-3 * work->dx - deepest_left;
+    } else {
+      qsort(scratch, count, sizeof *scratch, compare_float);
+      raise[c] = 1e-4 * work->dx - scratch[keep];
+    }
+  }
+  for (int j = 0; j < work->ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int32_t c = e->region[(size_t)j * nx + i];
+      if (c >= 0) LSM_AT(work, i, j) += (float)raise[c];
+    }
+}
+
+double lsm_end_depth(const lsm_grid *phi) {
+  return fmax(-(double)lsm_grid_min(phi), 0.5 * phi->dx);
+}
+
+double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma) {
+  if (sigma >= 0.5) return R * (1.0 + 1e-6) + 1e-6;
+  if (profile == LSM_END_BLEND) return R * sigma / (1.0 - sigma);
+  return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
+}
+
+struct lsm_end {
+  lsm_end_profile profile;
+  const lsm_grid *full; /* F's phi (borrowed) */
+  double R;             /* F's largest depth (linear profiles) */
+  double H;             /* the gap's height */
+  double trend_reach;   /* how far past F the per-cell trend is carried */
+  lsm_grid *slope;      /* per cell max(m, 0), m = (phi_F - phi_N) / h_N (trend) */
+  end_parts parts;      /* F's components and how each ends (trend) */
+  double *target;       /* per part: cells kept at the current sigma */
+  double *raise;        /* per part: the erosion that keeps them */
+  float *scratch;       /* one float per cell */
+};
+
+void lsm_end_destroy(lsm_end **end) {
+  if (!end || !*end) return;
+  lsm_end *e = *end;
+  lsm_grid_destroy(&e->slope);
+  end_parts_free(&e->parts);
+  free(e->target);
+  free(e->raise);
+  free(e->scratch);
+  free(e);
+  *end = NULL;
+}
+
+lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
+                          lsm_end_profile profile, lsm_end **out, lsm_err *err) {
+  *out = NULL;
+  lsm_end *e = lsm_alloc(1, sizeof *e, err, "end of an object");
+  if (!e) return err ? err->status : LSM_ERR_NOMEM;
+  memset(e, 0, sizeof *e);
+  e->profile = profile;
+  e->full = full;
+  e->R = lsm_end_depth(full);
+  e->H = H;
+  e->trend_reach = H;
+  if (profile != LSM_END_TREND) {
+    *out = e;
+    return LSM_OK;
+  }
+  const size_t cells = (size_t)full->nx * (size_t)full->ny;
+  lsm_status st = lsm_grid_clone(full, &e->slope, err);
+  if (st == LSM_OK && !(e->scratch = lsm_alloc(cells, sizeof *e->scratch, err, "end cells")))
+    st = err ? err->status : LSM_ERR_NOMEM;
+  if (st == LSM_OK) {
+    const float hn = beyond ? (float)h_beyond : 1.0f;
+    e->trend_reach = hn;
+    for (int j = 0; j < full->ny; ++j)
+      for (int i = 0; i < full->nx; ++i)
+        LSM_AT(e->slope, i, j) =
+            beyond ? fmaxf((LSM_AT(full, i, j) - LSM_AT(beyond, i, j)) / hn, 0.0f) : 0.0f;
+    /* with no slice N beyond F (a lone section) nothing tells how the object
+     * ends: every part is a flat end */
+    st = end_parts_find(full, beyond, hn, &e->parts, err);
+  }
+  const size_t parts = (size_t)e->parts.count + 1;
+  if (st == LSM_OK && !(e->target = lsm_alloc(parts, sizeof *e->target, err, "end parts")))
+    st = err ? err->status : LSM_ERR_NOMEM;
+  if (st == LSM_OK && !(e->raise = lsm_alloc(parts, sizeof *e->raise, err, "end parts")))
+    st = err ? err->status : LSM_ERR_NOMEM;
+  if (st != LSM_OK) {
+    lsm_end_destroy(&e);
+    return st;
+  }
+  *out = e;
+  return LSM_OK;
+}
+
+void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
+  const lsm_grid *full = e->full;
+  if (e->profile != LSM_END_TREND) {
+    const float depth = (float)lsm_end_cap_depth(e->profile, e->R, sigma);
+    for (int j = 0; j < work->ny; ++j)
+      for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + depth;
+    return;
+  }
+  const float rise = (float)fmin(sigma * e->H, e->trend_reach);
+  for (int j = 0; j < work->ny; ++j)
+    for (int i = 0; i < work->nx; ++i)
+      LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(e->slope, i, j);
+  const double tip = fmin(1.0, 2.0 * (1.0 - sigma)); /* 1 up to mid-gap, 0 at the empty slice */
+  for (int c = 0; c < e->parts.count; ++c) {
+    const end_part *pc = &e->parts.part[c];
+    const double narrowing = fmax(pc->weight * pc->area_f + sigma * e->H * pc->rate, 0.0);
+    e->target[c] =
+        fmin(narrowing + (1.0 - pc->weight) * pc->area_f, pc->area_f * pow(tip, pc->power));
+  }
+  erode_parts(work, &e->parts, e->target, e->scratch, e->raise);
+}

@@ -1,0 +1,114 @@
+/* lsm_ends: how an object ends inside a gap whose far side is an empty slice.
+ *
+ * F is the last non-empty section, sigma the fraction of the gap from F
+ * (sigma = 0) to the empty slice (sigma = 1), H the gap's height.  F's
+ * section is kept at most up to mid-gap, and in between the object is F
+ * eroded; phi + e is the exact level-set solution of a uniform inward motion
+ * by e, so no PDE is needed.
+ *
+ * Linear profile (LSM_END_PARABOLOID, LSM_END_BLEND): a uniform erosion by a
+ * depth that only the pair sees (lsm_end_cap_depth); the object ends at
+ * mid-gap (sigma >= 1/2 is empty).
+ *
+ * Cubic profile (LSM_END_TREND): the end continues what the slices before it
+ * were doing.
+ *   - Shape: per cell, phi_F + sigma H max(m, 0), m = (phi_F - phi_N) / h_N the
+ *     z-slope of phi from the slice N beyond F (in that pair's frame, which
+ *     also keeps moving: the stack driver's frame).  This is the slope the
+ *     spline on the other side of F ends with, so the surface is C1 across F
+ *     wherever the shape shrinks toward its end; where it grows toward the end
+ *     it is held at F (nothing grows past the last slice).  The trend is
+ *     carried at most h_N past F (no farther than it was measured): with
+ *     uneven heights a slope taken over a short step, a pixel of alignment
+ *     rounding included, would otherwise be multiplied by a long gap.  With
+ *     even spacing (sigma H <= H/2 < h_N) this changes nothing.
+ *   - Parts: each 8-connected component of F's section ends on its own (two
+ *     kidneys, a paw beside a body), with the areas below counted per part:
+ *     A_F its cells, A_N the cells of N's components that overlap it (an N
+ *     component overlapping several parts shared by overlap; one that misses
+ *     F ended in the gap N -> F and says nothing here).  A part mostly
+ *     outside N (under 40 % of it inside N; 60 % and more counts whole, linear
+ *     in between) grows out toward the end, a tail or a thin part meeting a
+ *     wide body, and is a flat end: the narrowing of N's wide section is not
+ *     its own.  The erosion runs per part, over the cells nearest to it
+ *     (meshes voxelised from npm bunny / dragon / teapot, 6 stacks every 16th:
+ *     no held-out slice left empty where the object is, 3.7 per stack before;
+ *     mean per-slice Dice 0.823 -> 0.846).
+ *   - Area: cross-sections near the tip of a smooth surface shrink linearly in
+ *     area (a paraboloid), so the area is capped by the line through the areas
+ *     of N and F, A(sigma) = A_F - sigma H (A_N - A_F) / h_N when the object
+ *     narrows toward its end (A_F otherwise); past mid-gap also by
+ *     A_F (2 (1 - sigma))^p, a tip closing at the empty slice, p = 2 (a cone)
+ *     where the section narrows toward the end by 10 % or more and p = 1 (area
+ *     falling linearly) where it does not.  With no slice beyond F (a lone
+ *     section: an object shorter than about two gaps) nothing tells how it
+ *     ends, and it is treated as a flat end; a paraboloid closing at mid-gap,
+ *     the rule before, left half of each gap empty where such an object is
+ *     (padded.py, a 21-slice ball every 16th: pooled Dice 0.35 -> 0.84, pooled
+ *     HD95 128 -> 2 px).  Each part's shape is eroded uniformly to meet its
+ *     cap.
+ *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap and
+ *   closes in a tip at the empty slice, a rounded one closes along its own
+ *   paraboloid.  The tip: where a flat end lies inside the gap is unknown;
+ *   mid-gap is the median, but a slice left empty where the object is present
+ *   costs the pooled 95 % Hausdorff distance the image size for its whole
+ *   outline, and an object cut one slice above the empty slice loses half a
+ *   gap.  validation/padded.py (10 shapes cut to the object plus one empty
+ *   slice, every 8th / 16th): pooled Dice 0.9654 -> 0.9776 / 0.9243 -> 0.9499,
+ *   pooled HD95 13.7 -> 1.8 / 52.5 -> 6.0 px (a cone tip at every end: 0.9749
+ *   / 2.6 px, 0.9452 / 7.5 px); end_offsets.py (ends at every offset, 14
+ *   shapes, strides 4, 8, 16): pooled Dice 0.9517 -> 0.9476, pooled HD95 11.4
+ *   -> 16.0 px (cone tip: 0.9496, 15.2 px), the price of the tip when the end
+ *   is equally likely anywhere.  Before that, the area cap was chosen over
+ *   the previous rule (the monotone cubic through N, F and a virtual slice
+ *   phi_F + R at the empty one, R the largest depth, with the end held in
+ *   place) with validation/end_offsets.py, which places the object's ends at
+ *   every offset inside a gap: over 13 shapes at strides 4, 8 and 16 the mean
+ *   per-slice Dice goes from 0.905 to 0.917 and the mean HD95 from 1.24 to
+ *   1.12 px on average; pooled Dice rises in 33 of the 39 cases (ball every
+ *   16th 0.9807 -> 0.9817, cylinder 0.9441 -> 0.9517, slanted tube 0.8826 ->
+ *   0.9355) and falls for a 7 px ball (0.9399 -> 0.9372) and a torus (0.9204
+ *   -> 0.9183) every 16th, where the area line through slices 16 apart
+ *   overestimates a strongly curved end, and by <= 0.0015 for two diverging
+ *   tubes.
+ *
+ * Usage: lsm_end_create once per gap, lsm_end_at for each output fraction,
+ * lsm_end_destroy.  Grids hold phi with negative inside, in one frame. */
+#ifndef LSM_ENDS_H
+#define LSM_ENDS_H
+
+#include "lsm_grid.h"
+#include "lsm_status.h"
+
+typedef enum lsm_end_profile {
+  LSM_END_PARABOLOID, /* linear z-profile, ls and pls: radius R sqrt(1 - 2 sigma) */
+  LSM_END_BLEND,      /* linear z-profile, blend: the zero set of (1 - sigma) phi + sigma R */
+  LSM_END_TREND       /* cubic z-profile: the trend of N -> F, area caps, per part */
+} lsm_end_profile;
+
+typedef struct lsm_end lsm_end;
+
+/* The largest depth R of a non-empty section's field, -min phi (at least
+ * half a cell): the constant an empty slice stands for next to it. */
+double lsm_end_depth(const lsm_grid *phi);
+
+/* Erosion depth at fraction sigma of the end gap with the linear profile, R
+ * the section's largest depth: R (1 - sqrt(1 - 2 sigma)) for the paraboloid,
+ * R sigma / (1 - sigma) for the blend; past R from sigma = 1/2 (nothing left). */
+double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma);
+
+/* Prepares the end of F's section (full, F's phi) in a gap of height H.
+ * beyond: N's phi in F's frame and grid shape, or NULL (no slice beyond F, or
+ * one that is empty); h_beyond: |z_N - z_F| (ignored without N).  Only
+ * LSM_END_TREND reads beyond.  full must stay alive and unchanged until
+ * lsm_end_destroy; beyond may be freed on return. */
+lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
+                          lsm_end_profile profile, lsm_end **out, lsm_err *err);
+
+/* work (F's grid shape) := the object's phi at fraction sigma in [0, 1] of the
+ * gap from F to the empty slice. */
+void lsm_end_at(lsm_end *end, double sigma, lsm_grid *work);
+
+void lsm_end_destroy(lsm_end **end);
+
+#endif

@@ -1,0 +1,197 @@
+/* Tests of the end rule (solver/lsm_ends.h): how an object ends in a gap
+ * whose far side is an empty slice.  Sections are discs; the area of a
+ * result is its count of cells with phi <= 0. */
+#include "tests/lsm_test_mask.h"
+
+#include "solver/lsm_ends.h"
+#include "solver/lsm_sdf.h"
+
+#define SIZE 96
+#define PI 3.14159265358979323846
+
+typedef struct disc {
+  double cx, cy, r;
+} disc;
+
+/* phi of the union of n discs on a SIZE x SIZE grid of unit cells. */
+static lsm_grid *discs_phi(const disc *d, int n) {
+  lsm_mask m = lsm_test_mask(SIZE, SIZE);
+  for (int k = 0; k < n; ++k) lsm_test_paint_disc(&m, d[k].cx, d[k].cy, d[k].r);
+  lsm_grid *phi = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_grid_create(SIZE, SIZE, 1.0f, 1.0f, &phi, &err), LSM_OK);
+  assert_int_equal(lsm_sdf_from_mask(&m, phi, &err), LSM_OK);
+  lsm_mask_free(&m);
+  return phi;
+}
+
+static double inside_cells(const lsm_grid *phi, int x0, int x1) {
+  double n = 0.0;
+  for (int j = 0; j < phi->ny; ++j)
+    for (int i = x0; i < x1; ++i) n += LSM_AT(phi, i, j) <= 0.0f;
+  return n;
+}
+
+static double area(const lsm_grid *phi) { return inside_cells(phi, 0, phi->nx); }
+
+/* The end at sigma, for F (and N beyond it, or NULL, h_beyond away) over a
+ * gap of height H: a new grid (the caller destroys it). */
+static lsm_grid *end_at(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
+                        lsm_end_profile profile, double sigma) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_end *end = NULL;
+  lsm_grid *work = NULL;
+  assert_int_equal(lsm_end_create(full, beyond, h_beyond, H, profile, &end, &err), LSM_OK);
+  assert_int_equal(lsm_grid_clone(full, &work, &err), LSM_OK);
+  lsm_end_at(end, sigma, work);
+  lsm_end_destroy(&end);
+  assert_null(end);
+  return work;
+}
+
+static double end_area(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
+                       lsm_end_profile profile, double sigma) {
+  lsm_grid *work = end_at(full, beyond, h_beyond, H, profile, sigma);
+  const double a = area(work);
+  lsm_grid_destroy(&work);
+  return a;
+}
+
+/* R is the section's largest depth, -min phi (a disc's radius, less the
+ * distance from its centre to the nearest cell centre), at least half a cell. */
+static void test_depth(void **state) {
+  (void)state;
+  const disc d = {47.0, 47.0, 20.0};
+  lsm_grid *phi = discs_phi(&d, 1);
+  assert_close(lsm_end_depth(phi), -lsm_grid_min(phi), 1e-6);
+  assert_close(lsm_end_depth(phi), 20.0, 0.5);
+  lsm_grid_fill(phi, 0.1f);
+  assert_close(lsm_end_depth(phi), 0.5, 1e-9);
+  lsm_grid_destroy(&phi);
+}
+
+/* Linear profile: a uniform erosion of the disc (effective radius r, largest
+ * depth R) by R (1 - sqrt(1 - 2 sigma)) for ls (a paraboloid cap: the area
+ * falls about linearly to nothing at mid-gap), by R sigma / (1 - sigma) for
+ * the blend (the zero set of (1 - sigma) phi + sigma R); nothing is left
+ * from mid-gap on. */
+static void test_linear_profiles(void **state) {
+  (void)state;
+  const disc d = {47.5, 47.5, 30.0};
+  lsm_grid *phi = discs_phi(&d, 1);
+  const double R = lsm_end_depth(phi), a0 = area(phi), r = sqrt(a0 / PI);
+  for (double sigma = 0.1; sigma < 0.45; sigma += 0.1) {
+    const double r_ls = r - R * (1.0 - sqrt(1.0 - 2.0 * sigma));
+    const double r_blend = r - R * sigma / (1.0 - sigma);
+    const double ls = end_area(phi, NULL, 0.0, 8.0, LSM_END_PARABOLOID, sigma);
+    const double blend = end_area(phi, NULL, 0.0, 8.0, LSM_END_BLEND, sigma);
+    print_message("sigma %.1f: ls %.0f (%.0f), blend %.0f (%.0f)\n", sigma, ls, PI * r_ls * r_ls,
+                  blend, PI * r_blend * r_blend);
+    assert_close(sqrt(ls / PI), r_ls, 0.5);
+    assert_close(sqrt(blend / PI), r_blend, 0.5);
+  }
+  for (double sigma = 0.5; sigma <= 1.0; sigma += 0.25) {
+    assert_true(end_area(phi, NULL, 0.0, 8.0, LSM_END_PARABOLOID, sigma) == 0.0);
+    assert_true(end_area(phi, NULL, 0.0, 8.0, LSM_END_BLEND, sigma) == 0.0);
+  }
+  lsm_grid_destroy(&phi);
+}
+
+/* Cubic profile, nothing beyond F (a lone section): a flat end, whole up to
+ * mid-gap, then its area falls linearly to nothing at the empty slice. */
+static void test_flat_end(void **state) {
+  (void)state;
+  const disc d = {47.5, 47.5, 20.0};
+  lsm_grid *phi = discs_phi(&d, 1);
+  const double a0 = area(phi);
+  assert_true(end_area(phi, NULL, 0.0, 8.0, LSM_END_TREND, 0.25) == a0);
+  assert_true(end_area(phi, NULL, 0.0, 8.0, LSM_END_TREND, 0.5) == a0);
+  for (double sigma = 0.625; sigma < 0.95; sigma += 0.125) {
+    const double a = end_area(phi, NULL, 0.0, 8.0, LSM_END_TREND, sigma);
+    const double cap = a0 * 2.0 * (1.0 - sigma);
+    print_message("sigma %.3f: %.0f cells, cap %.0f\n", sigma, a, cap);
+    assert_true(a <= cap);
+    assert_true(a >= 0.9 * cap);
+  }
+  assert_true(end_area(phi, NULL, 0.0, 8.0, LSM_END_TREND, 1.0) == 0.0);
+  lsm_grid_destroy(&phi);
+}
+
+/* Cubic profile, F narrower than N (a rounded end): the area follows the line
+ * through N's and F's areas, and past mid-gap also a cone's tip,
+ * A_F (2 (1 - sigma))^2. */
+static void test_narrowing_end(void **state) {
+  (void)state;
+  const disc f = {47.5, 47.5, 20.0}, n = {47.5, 47.5, 24.0};
+  lsm_grid *phi_f = discs_phi(&f, 1), *phi_n = discs_phi(&n, 1);
+  const double a_f = area(phi_f), a_n = area(phi_n), h = 8.0, H = 8.0;
+  for (double sigma = 0.125; sigma < 0.95; sigma += 0.125) {
+    const double a = end_area(phi_f, phi_n, h, H, LSM_END_TREND, sigma);
+    const double line = a_f - sigma * H * (a_n - a_f) / h;
+    const double tip = a_f * pow(fmin(1.0, 2.0 * (1.0 - sigma)), 2.0);
+    const double cap = fmin(line, tip);
+    print_message("sigma %.3f: %.0f cells, line %.0f, tip %.0f\n", sigma, a, line, tip);
+    assert_true(a <= cap);
+    assert_true(a >= cap - 0.05 * a_f);
+  }
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
+/* Each part ends on its own: of two discs of F, the one inside N's wide disc
+ * narrows with it; the one outside N grows out toward the end (a tail) and
+ * is a flat end, whole up to mid-gap. */
+static void test_parts_end_apart(void **state) {
+  (void)state;
+  const disc f[2] = {{28.0, 47.5, 12.0}, {78.0, 47.5, 8.0}}, n = {28.0, 47.5, 18.0};
+  lsm_grid *phi_f = discs_phi(f, 2), *phi_n = discs_phi(&n, 1);
+  const double body = inside_cells(phi_f, 0, 60), tail = inside_cells(phi_f, 60, SIZE);
+  const double body_n = area(phi_n);
+  lsm_grid *work = end_at(phi_f, phi_n, 8.0, 8.0, LSM_END_TREND, 0.375);
+  const double body_end = inside_cells(work, 0, 60), tail_end = inside_cells(work, 60, SIZE);
+  const double line = body - 0.375 * (body_n - body);
+  print_message("body %.0f -> %.0f (line %.0f), tail %.0f -> %.0f\n", body, body_end, line,
+                tail, tail_end);
+  assert_true(tail_end == tail);
+  assert_true(body_end <= line);
+  assert_true(body_end >= line - 0.05 * body);
+  lsm_grid_destroy(&work);
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
+/* The per-cell trend of N -> F is carried at most h_N past F: with a slice
+ * N only 1 below F and a gap of 16, an F that does not narrow in area (N
+ * the same disc shifted) keeps moving by at most N -> F's step. */
+static void test_trend_reach(void **state) {
+  (void)state;
+  const disc f = {50.5, 47.5, 20.0}, n = {49.5, 47.5, 20.0};
+  lsm_grid *phi_f = discs_phi(&f, 1), *phi_n = discs_phi(&n, 1);
+  lsm_grid *work = end_at(phi_f, phi_n, 1.0, 16.0, LSM_END_TREND, 0.5);
+  /* per cell phi_F + min(sigma H, h_N) max(phi_F - phi_N, 0) / h_N: the
+   * trailing side rises by at most one cell, never by sigma H = 8 */
+  double worst = 0.0;
+  for (int j = 0; j < SIZE; ++j)
+    for (int i = 0; i < SIZE; ++i)
+      worst = fmax(worst, LSM_AT(work, i, j) - LSM_AT(phi_f, i, j));
+  print_message("largest rise %.3f cells\n", worst);
+  assert_true(worst <= 1.0 + 1e-3);
+  assert_true(worst >= 0.5);
+  lsm_grid_destroy(&work);
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_depth),
+      cmocka_unit_test(test_linear_profiles),
+      cmocka_unit_test(test_flat_end),
+      cmocka_unit_test(test_narrowing_end),
+      cmocka_unit_test(test_parts_end_apart),
+      cmocka_unit_test(test_trend_reach),
+  };
+  return cmocka_run_group_tests_name("ends", tests, NULL, NULL);
+}
