@@ -39,44 +39,6 @@ static void end_parts_free(end_parts *e) {
   memset(e, 0, sizeof *e);
 }
 
-/* Breadth-first spread of labels: each cell of queue[0 .. tail) passes its
- * label to its unlabelled 8-neighbours (those with phi <= 0 only, unless phi
- * is NULL), and they to theirs.  queue holds nx * ny cells. */
-static void spread_labels(const lsm_grid *phi, int nx, int ny, int32_t *label, int32_t *queue,
-                          size_t tail) {
-  for (size_t head = 0; head < tail;) {
-    const int32_t q = queue[head++];
-    const int i = q % nx, j = q / nx;
-    for (int dj = -1; dj <= 1; ++dj)
-      for (int di = -1; di <= 1; ++di) {
-        const int a = i + di, b = j + dj;
-        if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
-        const size_t t = (size_t)b * nx + a;
-        if (label[t] >= 0 || (phi && LSM_AT(phi, a, b) > 0.0f)) continue;
-        label[t] = label[q];
-        queue[tail++] = (int32_t)t;
-      }
-  }
-}
-
-/* Labels the 8-connected components of {phi <= 0}: label[cell] = component
- * (or -1); returns the count.  queue: nx * ny. */
-static int32_t label_components(const lsm_grid *phi, int32_t *label, int32_t *queue) {
-  const int nx = phi->nx, ny = phi->ny;
-  const size_t n = (size_t)nx * (size_t)ny;
-  for (size_t k = 0; k < n; ++k) label[k] = -1;
-  int32_t count = 0;
-  for (int j0 = 0; j0 < ny; ++j0)
-    for (int i0 = 0; i0 < nx; ++i0) {
-      const size_t start = (size_t)j0 * nx + i0;
-      if (label[start] >= 0 || LSM_AT(phi, i0, j0) > 0.0f) continue;
-      label[start] = count++;
-      queue[0] = (int32_t)start;
-      spread_labels(phi, nx, ny, label, queue, 1);
-    }
-  return count;
-}
-
 /* Exponent p of the tip past mid-gap, area A_F (2 (1 - sigma))^p, from the
  * areas of F and of N, the slice beyond it.  A section that narrows toward
  * the end by 10 % or more closes like a cone (p = 2: the radius falls
@@ -105,7 +67,7 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
     free(label_n);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  e->count = label_components(full, e->region, queue);
+  e->count = lsm_grid_label_components(full, 0.0f, e->region, queue);
   const int m = e->count;
   e->part = lsm_alloc((size_t)m + 1, sizeof *e->part, err, "end components");
   e->first = e->part ? lsm_alloc((size_t)m + 2, sizeof *e->first, err, "end components") : NULL;
@@ -135,7 +97,7 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
     /* each component of N that overlaps F gives its area to the parts it
      * overlaps, in proportion to the overlap; one that misses F ends in the
      * gap N -> F and says nothing about how F ends */
-    const int32_t mn = label_components(nb, label_n, queue);
+    const int32_t mn = lsm_grid_label_components(nb, 0.0f, label_n, queue);
     double *n_area = lsm_alloc((size_t)mn + 1, sizeof *n_area, err, "end components");
     double *n_hits = n_area ? lsm_alloc((size_t)mn + 1, sizeof *n_hits, err, "end components") : NULL;
     if (!n_hits) {
@@ -177,7 +139,7 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
   size_t tail = 0;
   for (size_t k = 0; k < n; ++k)
     if (e->region[k] >= 0) queue[tail++] = (int32_t)k;
-  spread_labels(NULL, nx, ny, e->region, queue, tail);
+  lsm_grid_spread_labels(NULL, 0.0f, nx, ny, e->region, queue, tail);
   free(queue);
   free(label_n);
   return LSM_OK;

@@ -612,47 +612,45 @@ static lsm_status cap_unmatched(const lsm_grid *phi_x, lsm_grid *phi_y, lsm_err 
     free(label);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  for (size_t k = 0; k < n; ++k) label[k] = -1;
-  int32_t components = 0;
-  for (int j0 = 0; j0 < ny; ++j0)
-    for (int i0 = 0; i0 < nx; ++i0) {
-      const size_t start = (size_t)j0 * nx + i0;
-      if (label[start] >= 0 || LSM_AT(phi_x, i0, j0) > grow) continue;
-      /* breadth-first over the 8-connected component */
-      size_t head = 0, tail = 0;
-      label[start] = components;
-      queue[tail++] = (int32_t)start;
-      int matched = 0;
-      float depth = 0.0f, gap_to_other = INFINITY;
-      while (head < tail) {
-        const int32_t q = queue[head++];
-        const int i = q % nx, j = q / nx;
-        const float v = LSM_AT(phi_x, i, j), vy = LSM_AT(phi_y, i, j);
-        if (-v > depth) depth = -v;
-        if (v <= 0.0f && vy <= 0.0f) matched = 1;
-        if (v <= 0.0f && vy < gap_to_other) gap_to_other = vy;
-        for (int dj = -1; dj <= 1; ++dj)
-          for (int di = -1; di <= 1; ++di) {
-            const int a = i + di, b = j + dj;
-            if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
-            const size_t t = (size_t)b * nx + a;
-            if (label[t] >= 0 || LSM_AT(phi_x, a, b) > grow) continue;
-            label[t] = components;
-            queue[tail++] = (int32_t)t;
-          }
-      }
-      /* A component next to the other side's shapes (closer than its own
-       * depth) branches off them: the interpolation already makes it appear
-       * or vanish by mid-gap, from the right place. */
-      if (!matched && depth > 0.0f && gap_to_other > depth)
-        for (size_t k = 0; k < tail; ++k) {
-          const int i = queue[k] % nx, j = queue[k] / nx;
-          float *y = &LSM_AT(phi_y, i, j);
-          if (*y > depth) *y = depth;
-        }
-      components++;
-    }
+  const int32_t count = lsm_grid_label_components(phi_x, grow, label, queue);
+  /* per component: its largest depth, whether it overlaps the other side's
+   * inside, and how far the other side's nearest inside is (the smallest phi_y
+   * over its inside) */
   free(queue);
+  float *depth = lsm_alloc((size_t)count + 1, 2 * sizeof *depth, err, "component depths");
+  uint8_t *matched = depth ? lsm_alloc((size_t)count + 1, 1, err, "component depths") : NULL;
+  if (!matched) {
+    free(depth);
+    free(label);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  float *gap_to_other = depth + count + 1;
+  for (int32_t c = 0; c < count; ++c) {
+    depth[c] = 0.0f;
+    gap_to_other[c] = INFINITY;
+    matched[c] = 0;
+  }
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int32_t c = label[(size_t)j * nx + i];
+      const float v = LSM_AT(phi_x, i, j), vy = LSM_AT(phi_y, i, j);
+      if (c < 0) continue;
+      if (-v > depth[c]) depth[c] = -v;
+      if (v <= 0.0f && vy <= 0.0f) matched[c] = 1;
+      if (v <= 0.0f && vy < gap_to_other[c]) gap_to_other[c] = vy;
+    }
+  /* A component next to the other side's shapes (closer than its own depth)
+   * branches off them: the interpolation already makes it appear or vanish by
+   * mid-gap, from the right place. */
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int32_t c = label[(size_t)j * nx + i];
+      if (c < 0 || matched[c] || !(depth[c] > 0.0f) || !(gap_to_other[c] > depth[c])) continue;
+      float *y = &LSM_AT(phi_y, i, j);
+      if (*y > depth[c]) *y = depth[c];
+    }
+  free(matched);
+  free(depth);
   free(label);
   lsm_grid_fill_ghosts(phi_y);
   return LSM_OK;
