@@ -184,8 +184,47 @@ static void test_trend_reach(void **state) {
   lsm_grid_destroy(&phi_n);
 }
 
+/* The component labeller the end rule counts parts with: 8-connected
+ * components of {phi <= level}, numbered in row-major order of their first
+ * cell; the spread without phi gives every cell the label of the nearest
+ * labelled cell (breadth-first, 8-neighbour steps). */
+static void test_label_components(void **state) {
+  (void)state;
+  lsm_grid *phi = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_grid_create(8, 4, 1.0f, 1.0f, &phi, &err), LSM_OK);
+  lsm_grid_fill(phi, 1.0f);
+  /* rows: "##......", "..#....#", "......1.", "#......." (1: phi = 0.5) */
+  const int cells[][2] = {{0, 0}, {1, 0}, {2, 1}, {7, 1}, {0, 3}};
+  for (size_t k = 0; k < sizeof cells / sizeof cells[0]; ++k)
+    LSM_AT(phi, cells[k][0], cells[k][1]) = -1.0f;
+  LSM_AT(phi, 6, 2) = 0.5f;
+  int32_t label[32], queue[32];
+  assert_int_equal(lsm_grid_label_components(phi, 0.0f, label, queue), 3);
+  assert_int_equal(label[0], 0);
+  assert_int_equal(label[1 * 8 + 2], 0); /* touches (1, 0) diagonally */
+  assert_int_equal(label[1 * 8 + 7], 1);
+  assert_int_equal(label[3 * 8 + 0], 2);
+  assert_int_equal(label[2 * 8 + 6], -1);
+  /* at level 0.5 the cell (6, 2) joins (7, 1) */
+  assert_int_equal(lsm_grid_label_components(phi, 0.5f, label, queue), 3);
+  assert_int_equal(label[2 * 8 + 6], 1);
+  /* spread to every cell from the labelled ones */
+  size_t tail = 0;
+  for (int32_t k = 0; k < 32; ++k)
+    if (label[k] >= 0) queue[tail++] = k;
+  lsm_grid_spread_labels(NULL, 0.0f, 8, 4, label, queue, tail);
+  assert_int_equal(label[3 * 8 + 1], 2); /* next to (0, 3) */
+  assert_int_equal(label[0 * 8 + 7], 1); /* next to (7, 1) */
+  assert_int_equal(label[0 * 8 + 3], 0); /* next to (2, 1) */
+  for (int k = 0; k < 32; ++k) assert_true(label[k] >= 0);
+  lsm_grid_destroy(&phi);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_label_components),
       cmocka_unit_test(test_depth),
       cmocka_unit_test(test_linear_profiles),
       cmocka_unit_test(test_flat_end),
