@@ -593,6 +593,13 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
   return st;
 }
 
+/* What cap_unmatched learns about one component. */
+typedef struct unmatched_stats {
+  float depth;        /* its largest depth */
+  float gap_to_other; /* the smallest phi of the other side over its inside */
+  int matched;        /* it overlaps the other side's inside */
+} unmatched_stats;
+
 /* The halfway rule for components.  A connected component C of {phi_x <= 0}
  * (slightly dilated, by 2 cells, so a component's front band goes with it)
  * that does not overlap {phi_y <= 0}, and lies farther from it than its own
@@ -617,27 +624,20 @@ static lsm_status cap_unmatched(const lsm_grid *phi_x, lsm_grid *phi_y, lsm_err 
    * inside, and how far the other side's nearest inside is (the smallest phi_y
    * over its inside) */
   free(queue);
-  float *depth = lsm_alloc((size_t)count + 1, 2 * sizeof *depth, err, "component depths");
-  uint8_t *matched = depth ? lsm_alloc((size_t)count + 1, 1, err, "component depths") : NULL;
-  if (!matched) {
-    free(depth);
+  unmatched_stats *cs = lsm_alloc((size_t)count + 1, sizeof *cs, err, "component depths");
+  if (!cs) {
     free(label);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  float *gap_to_other = depth + count + 1;
-  for (int32_t c = 0; c < count; ++c) {
-    depth[c] = 0.0f;
-    gap_to_other[c] = INFINITY;
-    matched[c] = 0;
-  }
+  for (int32_t c = 0; c < count; ++c) cs[c] = (unmatched_stats){0.0f, INFINITY, 0};
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const int32_t c = label[(size_t)j * nx + i];
-      const float v = LSM_AT(phi_x, i, j), vy = LSM_AT(phi_y, i, j);
       if (c < 0) continue;
-      if (-v > depth[c]) depth[c] = -v;
-      if (v <= 0.0f && vy <= 0.0f) matched[c] = 1;
-      if (v <= 0.0f && vy < gap_to_other[c]) gap_to_other[c] = vy;
+      const float v = LSM_AT(phi_x, i, j), vy = LSM_AT(phi_y, i, j);
+      if (-v > cs[c].depth) cs[c].depth = -v;
+      if (v <= 0.0f && vy <= 0.0f) cs[c].matched = 1;
+      if (v <= 0.0f && vy < cs[c].gap_to_other) cs[c].gap_to_other = vy;
     }
   /* A component next to the other side's shapes (closer than its own depth)
    * branches off them: the interpolation already makes it appear or vanish by
@@ -645,12 +645,12 @@ static lsm_status cap_unmatched(const lsm_grid *phi_x, lsm_grid *phi_y, lsm_err 
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const int32_t c = label[(size_t)j * nx + i];
-      if (c < 0 || matched[c] || !(depth[c] > 0.0f) || !(gap_to_other[c] > depth[c])) continue;
+      if (c < 0 || cs[c].matched || !(cs[c].depth > 0.0f) || !(cs[c].gap_to_other > cs[c].depth))
+        continue;
       float *y = &LSM_AT(phi_y, i, j);
-      if (*y > depth[c]) *y = depth[c];
+      if (*y > cs[c].depth) *y = cs[c].depth;
     }
-  free(matched);
-  free(depth);
+  free(cs);
   free(label);
   lsm_grid_fill_ghosts(phi_y);
   return LSM_OK;
