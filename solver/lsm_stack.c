@@ -213,7 +213,8 @@ typedef struct frame {
 static int pixel_shift(double offset) { return (int)floor(offset + 0.5); }
 
 /* auto alignment's thresholds (see resolve_align) */
-static const double align_apart_overlap = 0.1; /* in-place overlap / smaller area below this: apart */
+static const double align_apart_overlap = 0.1; /* in-place overlap / smaller area below this: apart, */
+static const double align_apart_iou = 0.25;    /* if the IoU at the best translation is at least this */
 static const double align_alike_iou = 0.5;     /* IoU at the best translation from this, */
 static const double align_alike_gain = 1.5;    /* and this many times the IoU in place: alike */
 
@@ -236,17 +237,21 @@ static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b,
   LSM_TRY(lsm_register_shift(&a->filled, &b->filled, &tx, &ty, err));
   const long to_centroid = (long)(tx - dx) * (tx - dx) + (long)(ty - dy) * (ty - dy);
   if (to_centroid >= (long)tx * tx + (long)ty * ty) return LSM_OK;
-  /* A move, not a change of shape: either the two barely touch in place, or
-   * the translation of largest overlap makes them alike (IoU >= 1/2, and 1.5
-   * times the IoU in place: the shift explains most of the difference).  A
-   * small section overlapping a large one half or more in place (a part of an
-   * organ or a mesh narrowing, a section splitting) fits inside it at many
-   * shifts, so the best shift says nothing; it is morphed in place. */
+  /* A move, not a change of shape: either the two barely touch in place and
+   * the translation of largest overlap makes them somewhat alike (IoU >= 1/4),
+   * or that translation makes them alike (IoU >= 1/2, and 1.5 times the IoU in
+   * place: the shift explains most of the difference).  A small section
+   * overlapping a large one half or more in place (a part of an organ or a
+   * mesh narrowing, a section splitting) fits inside it at many shifts, so the
+   * best shift says nothing; it is morphed in place.  So is a small section
+   * apart from a large, different one (one part ending while another begins:
+   * at its best shift the small one is a small part of the large one). */
   const size_t area_a = lsm_mask_count(&a->filled), area_b = lsm_mask_count(&b->filled);
   const size_t smaller = area_a < area_b ? area_a : area_b;
   const size_t moved = lsm_mask_overlap(&a->filled, &b->filled, tx, ty);
-  const int apart = (double)in_place < align_apart_overlap * (double)smaller;
   const double iou_moved = (double)moved / (double)(area - moved);
+  const int apart =
+      (double)in_place < align_apart_overlap * (double)smaller && iou_moved >= align_apart_iou;
   const int alike = iou_moved >= align_alike_iou && iou_moved >= align_alike_gain * iou;
   if (apart || alike) *align = LSM_ALIGN_HULL;
   return LSM_OK;

@@ -21,10 +21,12 @@
  * the centroid difference makes it overlap the target more, the translation
  * of largest overlap (lsm_register) lies nearer the centroid difference than
  * no shift, and either the two barely touch in place (overlap < 1/10 of the
- * smaller) or that translation makes them alike (IoU >= 1/2 and 1.5 times the
- * IoU in place).  A pair whose shape changed (a branch or an ear growing out
- * moves the centroid without moving the object; a narrow part next to a wide
- * body fits inside it at many shifts) is not aligned.
+ * smaller) and that translation makes them somewhat alike (IoU >= 1/4), or it
+ * makes them alike (IoU >= 1/2 and 1.5 times the IoU in place).  A pair whose
+ * shape changed (a branch or an ear growing out moves the centroid without
+ * moving the object; a narrow part next to a wide body fits inside it at many
+ * shifts; a small part ends while a large one begins elsewhere) is not
+ * aligned.
  *
  * Moving parts (ls and pls, mask input, unaligned pairs): components that
  * moved off their place by the next slice, paired by lsm_parts, are taken

@@ -677,6 +677,25 @@ static void test_align_auto_inside(void **state) {
   assert_true(differ_hull > 0);
 }
 
+/* --align auto when a small section lies apart from a large, different one:
+ * a disc (r = 5) at (18, 18) and, on the next slice, a disc (r = 22) at
+ * (66, 66), touching nothing in place (one part of an object ends while
+ * another begins).  The centroid moves (48, 48) px and the small disc fits
+ * whole inside the large one around that shift, so the centroid and
+ * registration tests align, and the two barely touch in place.  But at the
+ * best shift they are not alike (IoU ~0.05 < 1/4): nothing moved, and auto
+ * must morph in place, exactly as --align none. */
+static void test_align_auto_apart_unlike(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(18, 18, 5)}}, {1, {disc(66, 66, 22)}}};
+  size_t differ_auto, differ_hull;
+  align_modes_differ(defs, 8, &differ_auto, &differ_hull);
+  print_message("apart, unlike: cells differing from none: auto %zu, hull %zu\n", differ_auto,
+                differ_hull);
+  assert_int_equal(differ_auto, 0);
+  assert_true(differ_hull > 0);
+}
+
 /* Parts moving apart (lsm_parts): two discs r = 5 at x = 40 and 60 (z = 0)
  * are at x = 20 and 80 at z = 8.  Neither overlaps itself across the gap and
  * the slice's centroid stays, so alignment cannot help; each disc must
@@ -888,6 +907,7 @@ int main(void) {
       cmocka_unit_test(test_align),
       cmocka_unit_test(test_align_auto_growth),
       cmocka_unit_test(test_align_auto_inside),
+      cmocka_unit_test(test_align_auto_apart_unlike),
       cmocka_unit_test(test_parts_apart),
       cmocka_unit_test(test_outline_ring),
       cmocka_unit_test(test_outline_vase),
