@@ -229,7 +229,8 @@ static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b,
   const int dy = pixel_shift(b->cy - cy) - pixel_shift(a->cy - cy);
   if (dx == 0 && dy == 0) return LSM_OK;
   const size_t in_place = lsm_mask_overlap(&a->filled, &b->filled, 0, 0);
-  const size_t area = lsm_mask_count(&a->filled) + lsm_mask_count(&b->filled);
+  const size_t area_a = lsm_mask_count(&a->filled), area_b = lsm_mask_count(&b->filled);
+  const size_t area = area_a + area_b;
   const double iou = (double)in_place / (double)(area - in_place);
   if (iou >= 0.5) return LSM_OK;
   if (lsm_mask_overlap(&a->filled, &b->filled, dx, dy) <= in_place) return LSM_OK;
@@ -246,7 +247,6 @@ static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b,
    * best shift says nothing; it is morphed in place.  So is a small section
    * apart from a large, different one (one part ending while another begins:
    * at its best shift the small one is a small part of the large one). */
-  const size_t area_a = lsm_mask_count(&a->filled), area_b = lsm_mask_count(&b->filled);
   const size_t smaller = area_a < area_b ? area_a : area_b;
   const size_t moved = lsm_mask_overlap(&a->filled, &b->filled, tx, ty);
   const double iou_moved = (double)moved / (double)(area - moved);
