@@ -7,6 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The area cap of the parabola through M, N and F keeps at least this share
+ * of the tip A_F (2 (1 - sigma))^p: a section where the object may still be
+ * is never left empty (see the header). */
+static const double parabola_floor = 0.1;
+
 static int compare_float(const void *x, const void *y) {
   const float a = *(const float *)x, b = *(const float *)y;
   return (a > b) - (a < b);
@@ -17,6 +22,8 @@ static int compare_float(const void *x, const void *y) {
 typedef struct end_part {
   double area_f;  /* its cells */
   double area_n;  /* cells of N's components that go on into it (shared by overlap) */
+  double area_m;  /* cells of M's components (the slice beyond N) that reach it */
+  int has_m;      /* some component of M reaches it */
   double nested;  /* its cells inside N */
   double weight;  /* share of it that narrows like N -> F; the rest is a flat end */
   double rate;    /* dA/dz of that share toward the end, <= 0 (cells per unit z) */
@@ -51,11 +58,50 @@ static double end_tip_power(double area_f, double area_n) {
   return 1.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
 }
 
+/* Each component of `other` (N, or M beyond it) that overlaps F gives its
+ * area to the parts it overlaps, in proportion to the overlap: into area_n
+ * (and the overlapping cells into nested) for N, into area_m (has_m set) for
+ * M.  A component that misses F ended before it and says nothing about how F
+ * ends.  label and queue hold nx * ny entries each. */
+static lsm_status share_areas(const lsm_grid *other, end_parts *e, int32_t *label, int32_t *queue,
+                              int farther, lsm_err *err) {
+  const size_t n = (size_t)other->nx * (size_t)other->ny;
+  const int32_t count = lsm_grid_label_components(other, 0.0f, label, queue);
+  double *area = lsm_alloc((size_t)count + 1, sizeof *area, err, "end components");
+  double *hits = area ? lsm_alloc((size_t)count + 1, sizeof *hits, err, "end components") : NULL;
+  if (!hits) {
+    free(area);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  memset(area, 0, ((size_t)count + 1) * sizeof *area);
+  memset(hits, 0, ((size_t)count + 1) * sizeof *hits);
+  for (size_t k = 0; k < n; ++k)
+    if (label[k] >= 0) {
+      area[label[k]] += 1.0;
+      if (e->region[k] >= 0) hits[label[k]] += 1.0;
+    }
+  for (size_t k = 0; k < n; ++k)
+    if (label[k] >= 0 && e->region[k] >= 0) {
+      end_part *pc = &e->part[e->region[k]];
+      const double share = area[label[k]] / hits[label[k]];
+      if (farther) {
+        pc->area_m += share;
+        pc->has_m = 1;
+      } else {
+        pc->nested += 1.0;
+        pc->area_n += share;
+      }
+    }
+  free(area);
+  free(hits);
+  return LSM_OK;
+}
+
 /* F's components and how each ends (see the header).  nb: N's field in F's
  * frame, or NULL (no slice beyond F: every part is a flat end); hn: the
  * height from N to F. */
 static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, double hn,
-                                 end_parts *e, lsm_err *err) {
+                                 const lsm_grid *nm, end_parts *e, lsm_err *err) {
   memset(e, 0, sizeof *e);
   const int nx = full->nx, ny = full->ny;
   const size_t n = (size_t)nx * (size_t)ny;
@@ -93,35 +139,14 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
     if (e->region[k] >= 0) e->inside[fill[e->region[k]]++] = (int32_t)k;
   for (int c = m; c > 0; --c) e->first[c] = e->first[c - 1]; /* fill advanced each start */
   e->first[0] = 0;
-  if (nb) {
-    /* each component of N that overlaps F gives its area to the parts it
-     * overlaps, in proportion to the overlap; one that misses F ends in the
-     * gap N -> F and says nothing about how F ends */
-    const int32_t mn = lsm_grid_label_components(nb, 0.0f, label_n, queue);
-    double *n_area = lsm_alloc((size_t)mn + 1, sizeof *n_area, err, "end components");
-    double *n_hits = n_area ? lsm_alloc((size_t)mn + 1, sizeof *n_hits, err, "end components") : NULL;
-    if (!n_hits) {
-      free(n_area);
-      free(queue);
-      free(label_n);
-      end_parts_free(e);
-      return err ? err->status : LSM_ERR_NOMEM;
-    }
-    memset(n_area, 0, ((size_t)mn + 1) * sizeof *n_area);
-    memset(n_hits, 0, ((size_t)mn + 1) * sizeof *n_hits);
-    for (size_t k = 0; k < n; ++k)
-      if (label_n[k] >= 0) {
-        n_area[label_n[k]] += 1.0;
-        if (e->region[k] >= 0) n_hits[label_n[k]] += 1.0;
-      }
-    for (size_t k = 0; k < n; ++k)
-      if (label_n[k] >= 0 && e->region[k] >= 0) {
-        end_part *pc = &e->part[e->region[k]];
-        pc->nested += 1.0;
-        pc->area_n += n_area[label_n[k]] / n_hits[label_n[k]];
-      }
-    free(n_area);
-    free(n_hits);
+  lsm_status st = LSM_OK;
+  if (nb) st = share_areas(nb, e, label_n, queue, 0, err);
+  if (st == LSM_OK && nm) st = share_areas(nm, e, label_n, queue, 1, err);
+  if (st != LSM_OK) {
+    free(queue);
+    free(label_n);
+    end_parts_free(e);
+    return st;
   }
   for (int c = 0; c < m; ++c) {
     end_part *pc = &e->part[c];
@@ -195,7 +220,8 @@ struct lsm_end {
   const lsm_grid *full; /* F's phi (borrowed) */
   double R;             /* F's largest depth (linear profiles) */
   double H;             /* the gap's height */
-  double trend_reach;   /* how far past F the per-cell trend is carried */
+  double trend_reach;   /* how far past F the per-cell trend is carried (h_N) */
+  double h_farther;     /* |z_M - z_N| */
   lsm_grid *slope;      /* per cell max(m, 0), m = (phi_F - phi_N) / h_N (trend) */
   end_parts parts;      /* F's components and how each ends (trend) */
   double *target;       /* per part: cells kept at the current sigma */
@@ -215,7 +241,8 @@ void lsm_end_destroy(lsm_end **end) {
   *end = NULL;
 }
 
-lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
+lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond,
+                          const lsm_grid *farther, double h_farther, double H,
                           lsm_end_profile profile, lsm_end **out, lsm_err *err) {
   *out = NULL;
   lsm_end *e = lsm_alloc(1, sizeof *e, err, "end of an object");
@@ -243,7 +270,8 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
             beyond ? fmaxf((LSM_AT(full, i, j) - LSM_AT(beyond, i, j)) / hn, 0.0f) : 0.0f;
     /* with no slice N beyond F (a lone section) nothing tells how the object
      * ends: every part is a flat end */
-    st = end_parts_find(full, beyond, hn, &e->parts, err);
+    e->h_farther = h_farther;
+    st = end_parts_find(full, beyond, hn, beyond ? farther : NULL, &e->parts, err);
   }
   const size_t parts = (size_t)e->parts.count + 1;
   if (st == LSM_OK && !(e->target = lsm_alloc(parts, sizeof *e->target, err, "end parts")))
@@ -276,6 +304,17 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
     const double narrowing = fmax(pc->weight * pc->area_f + sigma * e->H * pc->rate, 0.0);
     e->target[c] =
         fmin(narrowing + (1.0 - pc->weight) * pc->area_f, pc->area_f * pow(tip, pc->power));
+    if (pc->has_m && e->h_farther > 0.0) {
+      /* the parabola through the areas of M, N and F (Newton's form, z from F
+       * toward the end), for the share of the part that narrows like N -> F,
+       * never below a tenth of the tip */
+      const double hn = e->trend_reach, hm = e->h_farther, z = sigma * e->H;
+      const double d1 = (pc->area_f - pc->area_n) / hn, d0 = (pc->area_n - pc->area_m) / hm;
+      const double parabola = pc->area_f + d1 * z + (d1 - d0) / (hn + hm) * z * (z + hn);
+      const double least = parabola_floor * pc->area_f * pow(tip, pc->power);
+      e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
+                                            pc->weight * fmin(fmax(parabola, least), pc->area_f));
+    }
   }
   erode_parts(work, &e->parts, e->target, e->scratch, e->raise);
 }

@@ -40,7 +40,23 @@
  *     narrows toward its end (A_F otherwise); past mid-gap also by
  *     A_F (2 (1 - sigma))^p, a tip closing at the empty slice, p = 2 (a cone)
  *     where the section narrows toward the end by 10 % or more and p = 1 (area
- *     falling linearly) where it does not.  With no slice beyond F (a lone
+ *     falling linearly) where it does not.  With a third section M beyond N
+ *     (one of M's components reaching the part) the area is also capped by
+ *     the parabola through the areas of M, N and F, for the share of the part
+ *     that narrows like N -> F: the area of a smooth solid's section near its
+ *     end is close to quadratic in z (exactly so for an ellipsoid, a cone, a
+ *     paraboloid and a cylinder), so an end whose sections grew ever more
+ *     slowly toward F, or already shrank before it (a rounded blob past its
+ *     widest section), closes where that parabola says rather than staying
+ *     whole up to mid-gap.  It keeps at least a tenth of the tip above, so a
+ *     slice the object may reach is not left empty; where the parabola stays
+ *     above A_F (a cylinder, a cone's base) it changes nothing.  Measured
+ *     with validation/organs.py (16 random blobs standing in for CT organs):
+ *     pooled Dice every 16th 0.8708 -> 0.8803, pooled HD95 13.38 -> 11.16 px;
+ *     padded.py every 16th 0.8998 -> 0.9013, 6.18 -> 6.01 px; meshes.py every
+ *     16th 0.8984 -> 0.8994; atlas.py every 8th 0.8759 -> 0.8749 (the left
+ *     caudate sliced sagittally, whose thin tail goes on past a peak in area,
+ *     0.8797 -> 0.8424).  With no slice beyond F (a lone
  *     section: an object shorter than about two gaps) nothing tells how it
  *     ends, and it is treated as a flat end; a paraboloid closing at mid-gap,
  *     the rule before, left half of each gap empty where such an object is
@@ -102,7 +118,8 @@ double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma);
  * one that is empty); h_beyond: |z_N - z_F| (ignored without N).  Only
  * LSM_END_TREND reads beyond.  full must stay alive and unchanged until
  * lsm_end_destroy; beyond may be freed on return. */
-lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
+lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond,
+                          const lsm_grid *farther, double h_farther, double H,
                           lsm_end_profile profile, lsm_end **out, lsm_err *err);
 
 /* work (F's grid shape) := the object's phi at fraction sigma in [0, 1] of the

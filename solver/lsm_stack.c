@@ -181,6 +181,9 @@ static void hermite_basis(double s, double *h00, double *h10, double *h01, doubl
 typedef struct window {
   const slice *s[4];
   double z[4];
+  const slice *farther; /* M, the slice beyond the next one past a gap where the object
+                         * ends (cubic; NULL elsewhere or at the stack's end) */
+  double z_farther;
 } window;
 
 /* A neighbour takes part in the spline only if it exists and is not empty. */
@@ -197,6 +200,7 @@ typedef struct frame {
   double mx[2], my[2];   /* slopes of the shift path at A and B, per unit z */
   float clamp;           /* |phi| written out is at most this */
   int aligned;           /* the pair is aligned (hull, asked or chosen by auto) */
+  int end_aligned;       /* where the object ends: the pair beyond the full slice is aligned */
 } frame;
 
 /* --align auto: hull alignment for this pair only when the shape has moved.
@@ -288,6 +292,7 @@ static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_in
   if (interp == LSM_INTERP_CUBIC && a->empty != b->empty && asked != LSM_ALIGN_NONE &&
       window_usable(w, kn))
     LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, &end_align, err));
+  f->end_aligned = end_align == LSM_ALIGN_HULL;
   if (end_align == LSM_ALIGN_HULL) {
     const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
     const slice *sf = w->s[kf], *sn = w->s[kn];
@@ -384,7 +389,7 @@ static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
 static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double z, lsm_err *err) {
   LSM_TRY(slice_phi(s, r->opts->input, 0, 0, r->image_phi, err));
   frame f;
-  window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}};
+  window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}, NULL, 0.0};
   LSM_TRY(frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height,
                       r->opts->pixel_size, err));
   f.pad = 0;
@@ -742,9 +747,23 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
       st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn], beyond,
                      err);
   }
+  lsm_grid *farther = NULL;
+  if (st == LSM_OK && beyond && w->farther && w->farther->loaded && !w->farther->empty) {
+    /* M in the frame: centred on its own centroid where the end is aligned */
+    int dx = 0, dy = 0;
+    if (g->f.aligned || g->f.end_aligned) {
+      dx = pixel_shift(w->farther->cx - 0.5 * (g->f.width - 1));
+      dy = pixel_shift(w->farther->cy - 0.5 * (g->f.height - 1));
+    }
+    st = lsm_grid_clone(full, &farther, err);
+    if (st == LSM_OK)
+      st = slice_phi(w->farther, o->input, g->f.pad - dx, g->f.pad_y - dy, farther, err);
+  }
   if (st == LSM_OK)
-    st = lsm_end_create(full, beyond, fabs(w->z[kn] - w->z[kf]), g->f.H, profile, &end, err);
+    st = lsm_end_create(full, beyond, fabs(w->z[kn] - w->z[kf]), farther,
+                        fabs(w->z_farther - w->z[kn]), g->f.H, profile, &end, err);
   lsm_grid_destroy(&beyond);
+  lsm_grid_destroy(&farther);
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
     lsm_end_at(end, a_empty ? 1.0 - fs[k] : fs[k], work);
     frame_extract(&g->f, work, fs[k], r->out);
@@ -1089,12 +1108,25 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
   ps->source = i;
   ps->target = i + 1;
   lsm_status st = LSM_OK;
-  for (int k = 0; k < 4 && st == LSM_OK; ++k) {
+  /* A and B, then for the cubic the neighbours: the one past a non-empty
+   * side; past an empty side (the object ends in this gap) the end rule reads
+   * M instead, the slice beyond the next one past the full side (lsm_ends).
+   * At most four input slices are held. */
+  slice farther;
+  memset(&farther, 0, sizeof farther);
+  long m_idx = -1;
+  for (int q = 0; q < 4 && st == LSM_OK; ++q) {
+    const int k = q < 2 ? q + 1 : (q == 2 ? 0 : 3);
     const long idx = (long)i - 1 + k;
     if (idx < 0 || idx >= (long)src->count) continue;
     if ((k == 0 || k == 3) && !cubic) continue;
+    if ((k == 0 && s[1].empty) || (k == 3 && s[2].empty)) continue;
     st = slice_load(src, (size_t)idx, r->width, r->height, o->input, &s[k], err);
   }
+  if (st == LSM_OK && cubic && s[1].empty != s[2].empty)
+    m_idx = s[1].empty ? (long)i + 3 : (long)i - 2;
+  if (m_idx >= 0 && m_idx < (long)src->count)
+    st = slice_load(src, (size_t)m_idx, r->width, r->height, o->input, &farther, err);
   const double za = src->z[i], zb = src->z[i + 1];
   const size_t n_out = plan->last - plan->first;
   double *zs = NULL, *fs = NULL;
@@ -1116,12 +1148,14 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
   }
   if (st == LSM_OK) {
     window w = {{s[0].loaded ? &s[0] : NULL, &s[1], &s[2], s[3].loaded ? &s[3] : NULL},
-                {i > 0 ? src->z[i - 1] : 0.0, za, zb, i + 2 < src->count ? src->z[i + 2] : 0.0}};
+                {i > 0 ? src->z[i - 1] : 0.0, za, zb, i + 2 < src->count ? src->z[i + 2] : 0.0},
+                farther.loaded ? &farther : NULL, farther.loaded ? src->z[m_idx] : 0.0};
     st = run_gap_regular(r, &w, zs, fs, n, ps, err);
   }
   free(zs);
   free(fs);
   for (int k = 0; k < 4; ++k) slice_free(&s[k]);
+  slice_free(&farther);
   return st;
 }
 
@@ -1159,7 +1193,7 @@ static lsm_status run_per_iteration(stack_run *r, lsm_pair_stats *stats, lsm_err
     ps->target = i + 1;
     st = slice_load(src, i + 1, r->width, r->height, r->opts->input, &b, err);
     if (st != LSM_OK) break;
-    window w = {{NULL, &a, &b, NULL}, {0.0, src->z[i], src->z[i + 1], 0.0}};
+    window w = {{NULL, &a, &b, NULL}, {0.0, src->z[i], src->z[i + 1], 0.0}, NULL, 0.0};
     st = run_gap_iterations(r, &w, ps, err);
     if (st == LSM_OK) st = emit_input(r, &b, i + 1, src->z[i + 1], err);
     slice_free(&a);
@@ -1200,7 +1234,7 @@ static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, d
     memset(&res->stats, 0, sizeof res->stats);
     res->stats.source = i;
     res->stats.target = i + 1;
-    window w = {{NULL, &a, &b, NULL}, {0.0, base->src->z[i], base->src->z[i + 1], 0.0}};
+    window w = {{NULL, &a, &b, NULL}, {0.0, base->src->z[i], base->src->z[i + 1], 0.0}, NULL, 0.0};
     if (st == LSM_OK) st = run_gap_iterations(&task, &w, &res->stats, &e);
     if (st == LSM_OK) st = emit_input(&task, &b, i + 1, base->src->z[i + 1], &e);
     slice_free(&a);

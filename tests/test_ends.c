@@ -35,20 +35,28 @@ static double inside_cells(const lsm_grid *phi, int x0, int x1) {
 
 static double area(const lsm_grid *phi) { return inside_cells(phi, 0, phi->nx); }
 
-/* The end at sigma, for F (and N beyond it, or NULL, h_beyond away) over a
- * gap of height H: a new grid (the caller destroys it). */
-static lsm_grid *end_at(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
-                        lsm_end_profile profile, double sigma) {
+/* The end at sigma, for F (N beyond it, or NULL, h_beyond away; M beyond N,
+ * or NULL, h_farther from N) over a gap of height H: a new grid (the caller
+ * destroys it). */
+static lsm_grid *end_at_m(const lsm_grid *full, const lsm_grid *beyond, double h_beyond,
+                          const lsm_grid *farther, double h_farther, double H,
+                          lsm_end_profile profile, double sigma) {
   lsm_err err;
   lsm_err_clear(&err);
   lsm_end *end = NULL;
   lsm_grid *work = NULL;
-  assert_int_equal(lsm_end_create(full, beyond, h_beyond, H, profile, &end, &err), LSM_OK);
+  assert_int_equal(
+      lsm_end_create(full, beyond, h_beyond, farther, h_farther, H, profile, &end, &err), LSM_OK);
   assert_int_equal(lsm_grid_clone(full, &work, &err), LSM_OK);
   lsm_end_at(end, sigma, work);
   lsm_end_destroy(&end);
   assert_null(end);
   return work;
+}
+
+static lsm_grid *end_at(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
+                        lsm_end_profile profile, double sigma) {
+  return end_at_m(full, beyond, h_beyond, NULL, 0.0, H, profile, sigma);
 }
 
 static double end_area(const lsm_grid *full, const lsm_grid *beyond, double h_beyond, double H,
@@ -137,6 +145,57 @@ static void test_narrowing_end(void **state) {
     assert_true(a >= cap - 0.05 * a_f);
   }
   lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
+/* The sections of a ball of radius 40 at z = -4 (M), 12 (N) and 28 (F), the
+ * empty slice at 44: the area of a ball's section is quadratic in z, so the
+ * parabola through the areas of M, N and F follows the ball's own end,
+ * pi (40^2 - z^2), where the line through N and F alone (no M) keeps far too
+ * much (at mid-gap, z = 36: 955 cells against the line's 1558). */
+static void test_rounded_end(void **state) {
+  (void)state;
+  const double radius = 40.0, zm = -4.0, zn = 12.0, zf = 28.0, H = 16.0;
+  const disc m = {47.5, 47.5, sqrt(radius * radius - zm * zm)},
+             n = {47.5, 47.5, sqrt(radius * radius - zn * zn)},
+             f = {47.5, 47.5, sqrt(radius * radius - zf * zf)};
+  lsm_grid *phi_m = discs_phi(&m, 1), *phi_n = discs_phi(&n, 1), *phi_f = discs_phi(&f, 1);
+  for (double sigma = 0.25; sigma <= 0.5; sigma += 0.125) {
+    const double z = zf + sigma * H, ball = PI * (radius * radius - z * z);
+    lsm_grid *work = end_at_m(phi_f, phi_n, zf - zn, phi_m, zn - zm, H, LSM_END_TREND, sigma);
+    const double a = area(work);
+    const double line = end_area(phi_f, phi_n, zf - zn, H, LSM_END_TREND, sigma);
+    print_message("sigma %.3f: %.0f cells, ball %.0f, without M %.0f\n", sigma, a, ball, line);
+    assert_true(fabs(a - ball) <= 0.05 * ball + 20.0);
+    assert_true(line > 1.1 * ball);
+    lsm_grid_destroy(&work);
+  }
+  lsm_grid_destroy(&phi_m);
+  lsm_grid_destroy(&phi_n);
+  lsm_grid_destroy(&phi_f);
+}
+
+/* M does not change an end that keeps its size (a cylinder: M, N and F the
+ * same disc) or one that widens toward it ever faster (a cone's base): the
+ * parabola then lies above F's area, and the flat end stays whole up to
+ * mid-gap. */
+static void test_flat_end_with_m(void **state) {
+  (void)state;
+  const disc same = {47.5, 47.5, 20.0}, m = {47.5, 47.5, 12.0}, n = {47.5, 47.5, 16.0};
+  lsm_grid *phi_same = discs_phi(&same, 1), *phi_m = discs_phi(&m, 1), *phi_n = discs_phi(&n, 1);
+  const double a0 = area(phi_same);
+  for (double sigma = 0.125; sigma < 0.95; sigma += 0.125) {
+    lsm_grid *cyl = end_at_m(phi_same, phi_same, 8.0, phi_same, 8.0, 8.0, LSM_END_TREND, sigma);
+    lsm_grid *cone = end_at_m(phi_same, phi_n, 8.0, phi_m, 8.0, 8.0, LSM_END_TREND, sigma);
+    const double flat = end_area(phi_same, NULL, 0.0, 8.0, LSM_END_TREND, sigma);
+    assert_true(area(cyl) == flat);
+    assert_true(area(cone) == flat);
+    if (sigma <= 0.5) assert_true(flat == a0);
+    lsm_grid_destroy(&cyl);
+    lsm_grid_destroy(&cone);
+  }
+  lsm_grid_destroy(&phi_same);
+  lsm_grid_destroy(&phi_m);
   lsm_grid_destroy(&phi_n);
 }
 
@@ -229,6 +288,8 @@ int main(void) {
       cmocka_unit_test(test_linear_profiles),
       cmocka_unit_test(test_flat_end),
       cmocka_unit_test(test_narrowing_end),
+      cmocka_unit_test(test_rounded_end),
+      cmocka_unit_test(test_flat_end_with_m),
       cmocka_unit_test(test_parts_end_apart),
       cmocka_unit_test(test_trend_reach),
   };
