@@ -115,9 +115,11 @@ double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma);
 
 /* Prepares the end of F's section (full, F's phi) in a gap of height H.
  * beyond: N's phi in F's frame and grid shape, or NULL (no slice beyond F, or
- * one that is empty); h_beyond: |z_N - z_F| (ignored without N).  Only
- * LSM_END_TREND reads beyond.  full must stay alive and unchanged until
- * lsm_end_destroy; beyond may be freed on return. */
+ * one that is empty); h_beyond: |z_N - z_F| (ignored without N).  farther:
+ * M's phi, the slice beyond N, likewise, or NULL; h_farther: |z_M - z_N|
+ * (ignored without N and M).  Only LSM_END_TREND reads beyond and farther.
+ * full must stay alive and unchanged until lsm_end_destroy; beyond and
+ * farther may be freed on return. */
 lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond,
                           const lsm_grid *farther, double h_farther, double H,
                           lsm_end_profile profile, lsm_end **out, lsm_err *err);
