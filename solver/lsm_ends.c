@@ -7,10 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The area cap of the parabola through M, N and F keeps at least this share
- * of the tip A_F (2 (1 - sigma))^p: a section where the object may still be
- * is never left empty (see the header). */
-static const double parabola_floor = 0.1;
+/* Every end keeps at least this share of its tip A_F (2 (1 - sigma))^p,
+ * however fast the line or the parabola of its areas closes it: a section
+ * where the object may still be is not left empty (see the header). */
+static const double tip_floor = 0.1;
 
 static int compare_float(const void *x, const void *y) {
   const float a = *(const float *)x, b = *(const float *)y;
@@ -170,38 +170,55 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
   return LSM_OK;
 }
 
-/* Raises work around each part c (the cells of its region) uniformly (an
- * erosion, exact for a signed distance) just enough that at most target[c]
- * of its cells stay inside: past the value of the (target+1)-th deepest
- * (cells tied with it leave too); a part with target below 1 leaves wholly.
- * scratch holds nx * ny floats, raise count doubles. */
-static void erode_parts(lsm_grid *work, const end_parts *e, const double *target, float *scratch,
+/* Moves work around each part c (the cells of its region) uniformly so that
+ * the part keeps between least[c] and target[c] of its cells inside.  Too
+ * many: raised (an erosion, exact for a signed distance) past the value of
+ * the (target+1)-th deepest (cells tied with it leave too, unless that
+ * would leave fewer than least[c]: then they stay; a target below 1 empties
+ * the part).  Too few (the per-cell trend took more): lowered until
+ * the least[c] deepest of F's cells are inside, but never below F itself
+ * (full), so nothing grows past F.  scratch holds nx * ny floats, raise
+ * count doubles. */
+static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e,
+                        const double *target, const double *least, float *scratch,
                         double *raise) {
   const int nx = work->nx;
   for (int c = 0; c < e->count; ++c) {
+    const size_t cells = e->first[c + 1] - e->first[c];
     size_t count = 0;
     for (size_t q = e->first[c]; q < e->first[c + 1]; ++q) {
       const int32_t k = e->inside[q];
       const float v = LSM_AT(work, k % nx, k / nx);
-      if (v <= 0.0f) scratch[count++] = v;
+      scratch[q - e->first[c]] = v;
+      count += v <= 0.0f;
     }
     /* (targets are sums of shared areas: a rounding error must not cost a cell) */
     const size_t keep = target[c] < 1.0 ? 0 : (size_t)floor(target[c] + 1e-6);
+    size_t need = least[c] < 1.0 ? 0 : (size_t)floor(least[c] + 1e-6);
+    if (need > cells) need = cells;
     raise[c] = 0.0;
-    if (count <= keep) continue;
-    float deepest_left = scratch[0];
-    if (keep == 0) {
-      for (size_t q = 1; q < count; ++q) deepest_left = fminf(deepest_left, scratch[q]);
-      raise[c] = 1e-3 * work->dx - deepest_left;
-    } else {
-      qsort(scratch, count, sizeof *scratch, compare_float);
-      raise[c] = 1e-4 * work->dx - scratch[keep];
+    if (count > keep) {
+      qsort(scratch, cells, sizeof *scratch, compare_float);
+      /* cells tied with the cut leave with it, unless the least count is
+       * among them: then the cut moves past the tie */
+      size_t cut = keep;
+      while (need > 0 && cut < count && scratch[cut] <= scratch[need - 1]) ++cut;
+      if (cut == 0)
+        raise[c] = 1e-3 * work->dx - scratch[0];
+      else if (cut < count)
+        raise[c] = 1e-4 * work->dx - scratch[cut];
+    } else if (count < need) {
+      qsort(scratch, cells, sizeof *scratch, compare_float);
+      raise[c] = -1e-4 * work->dx - scratch[need - 1];
     }
   }
   for (int j = 0; j < work->ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const int32_t c = e->region[(size_t)j * nx + i];
-      if (c >= 0) LSM_AT(work, i, j) += (float)raise[c];
+      if (c < 0) continue;
+      float *v = &LSM_AT(work, i, j);
+      *v += (float)raise[c];
+      if (raise[c] < 0.0) *v = fmaxf(*v, LSM_AT(full, i, j));
     }
 }
 
@@ -224,7 +241,8 @@ struct lsm_end {
   double h_farther;     /* |z_M - z_N| */
   lsm_grid *slope;      /* per cell max(m, 0), m = (phi_F - phi_N) / h_N (trend) */
   end_parts parts;      /* F's components and how each ends (trend) */
-  double *target;       /* per part: cells kept at the current sigma */
+  double *target;       /* per part: cells kept at the current sigma, at most */
+  double *least;        /* per part: and at least (a tenth of the tip) */
   double *raise;        /* per part: the erosion that keeps them */
   float *scratch;       /* one float per cell */
 };
@@ -235,6 +253,7 @@ void lsm_end_destroy(lsm_end **end) {
   lsm_grid_destroy(&e->slope);
   end_parts_free(&e->parts);
   free(e->target);
+  free(e->least);
   free(e->raise);
   free(e->scratch);
   free(e);
@@ -276,6 +295,8 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
   const size_t parts = (size_t)e->parts.count + 1;
   if (st == LSM_OK && !(e->target = lsm_alloc(parts, sizeof *e->target, err, "end parts")))
     st = err ? err->status : LSM_ERR_NOMEM;
+  if (st == LSM_OK && !(e->least = lsm_alloc(parts, sizeof *e->least, err, "end parts")))
+    st = err ? err->status : LSM_ERR_NOMEM;
   if (st == LSM_OK && !(e->raise = lsm_alloc(parts, sizeof *e->raise, err, "end parts")))
     st = err ? err->status : LSM_ERR_NOMEM;
   if (st != LSM_OK) {
@@ -306,15 +327,15 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
         fmin(narrowing + (1.0 - pc->weight) * pc->area_f, pc->area_f * pow(tip, pc->power));
     if (pc->has_m && e->h_farther > 0.0) {
       /* the parabola through the areas of M, N and F (Newton's form, z from F
-       * toward the end), for the share of the part that narrows like N -> F,
-       * never below a tenth of the tip */
+       * toward the end), for the share of the part that narrows like N -> F */
       const double hn = e->trend_reach, hm = e->h_farther, z = sigma * e->H;
       const double d1 = (pc->area_f - pc->area_n) / hn, d0 = (pc->area_n - pc->area_m) / hm;
       const double parabola = pc->area_f + d1 * z + (d1 - d0) / (hn + hm) * z * (z + hn);
-      const double least = parabola_floor * pc->area_f * pow(tip, pc->power);
       e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
-                                            pc->weight * fmin(fmax(parabola, least), pc->area_f));
+                                            pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
     }
+    e->least[c] = tip_floor * pc->area_f * pow(tip, pc->power);
+    e->target[c] = fmax(e->target[c], e->least[c]);
   }
-  erode_parts(work, &e->parts, e->target, e->scratch, e->raise);
+  erode_parts(work, full, &e->parts, e->target, e->least, e->scratch, e->raise);
 }

@@ -199,6 +199,29 @@ static void test_flat_end_with_m(void **state) {
   lsm_grid_destroy(&phi_n);
 }
 
+/* However fast the line of the areas closes an end (N nearly five times F:
+ * the line reaches zero at sigma 0.26, and the per-cell trend, N's disc 12
+ * cells wider, takes the whole disc by sigma 0.7), it keeps a tenth of its
+ * tip, A_F (2 (1 - sigma))^2 / 10 cells, up to the empty slice: no section
+ * where the object may still be is left empty. */
+static void test_tip_floor(void **state) {
+  (void)state;
+  const disc f = {47.5, 47.5, 10.0}, n = {47.5, 47.5, 22.0};
+  lsm_grid *phi_f = discs_phi(&f, 1), *phi_n = discs_phi(&n, 1);
+  const double a_f = area(phi_f);
+  for (double sigma = 0.375; sigma < 0.95; sigma += 0.125) {
+    const double a = end_area(phi_f, phi_n, 8.0, 8.0, LSM_END_TREND, sigma);
+    const double floor_cells = 0.1 * a_f * pow(fmin(1.0, 2.0 * (1.0 - sigma)), 2.0);
+    print_message("sigma %.3f: %.0f cells, a tenth of the tip %.1f\n", sigma, a, floor_cells);
+    /* the floor, give or take the cells tied with the last one kept (rings
+     * of 4 or 8 cells around the disc's centre), and never nothing */
+    assert_true(a >= 1.0);
+    assert_true(fabs(a - floor_cells) <= 8.0);
+  }
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
 /* Each part ends on its own: of two discs of F, the one inside N's wide disc
  * narrows with it; the one outside N grows out toward the end (a tail) and
  * is a flat end, whole up to mid-gap. */
@@ -289,6 +312,7 @@ int main(void) {
       cmocka_unit_test(test_flat_end),
       cmocka_unit_test(test_narrowing_end),
       cmocka_unit_test(test_rounded_end),
+      cmocka_unit_test(test_tip_floor),
       cmocka_unit_test(test_flat_end_with_m),
       cmocka_unit_test(test_parts_end_apart),
       cmocka_unit_test(test_trend_reach),
