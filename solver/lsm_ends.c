@@ -184,13 +184,17 @@ static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e
                         double *raise) {
   const int nx = work->nx;
   for (int c = 0; c < e->count; ++c) {
+    /* the part's cells' values, those inside (<= 0) first: each side is
+     * sorted only when its order is needed */
     const size_t cells = e->first[c + 1] - e->first[c];
-    size_t count = 0;
+    size_t count = 0, outside = cells;
     for (size_t q = e->first[c]; q < e->first[c + 1]; ++q) {
       const int32_t k = e->inside[q];
       const float v = LSM_AT(work, k % nx, k / nx);
-      scratch[q - e->first[c]] = v;
-      count += v <= 0.0f;
+      if (v <= 0.0f)
+        scratch[count++] = v;
+      else
+        scratch[--outside] = v;
     }
     /* (targets are sums of shared areas: a rounding error must not cost a cell) */
     const size_t keep = target[c] < 1.0 ? 0 : (size_t)floor(target[c] + 1e-6);
@@ -198,7 +202,7 @@ static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e
     if (need > cells) need = cells;
     raise[c] = 0.0;
     if (count > keep) {
-      qsort(scratch, cells, sizeof *scratch, compare_float);
+      qsort(scratch, count, sizeof *scratch, compare_float);
       /* cells tied with the cut leave with it, unless the least count is
        * among them: then the cut moves past the tie */
       size_t cut = keep;
@@ -208,7 +212,7 @@ static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e
       else if (cut < count)
         raise[c] = 1e-4 * work->dx - scratch[cut];
     } else if (count < need) {
-      qsort(scratch, cells, sizeof *scratch, compare_float);
+      qsort(scratch + count, cells - count, sizeof *scratch, compare_float);
       raise[c] = -1e-4 * work->dx - scratch[need - 1];
     }
   }

@@ -1115,8 +1115,9 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
   slice farther;
   memset(&farther, 0, sizeof farther);
   long m_idx = -1;
+  static const int load_order[4] = {1, 2, 0, 3}; /* A, B, prev, next */
   for (int q = 0; q < 4 && st == LSM_OK; ++q) {
-    const int k = q < 2 ? q + 1 : (q == 2 ? 0 : 3);
+    const int k = load_order[q];
     const long idx = (long)i - 1 + k;
     if (idx < 0 || idx >= (long)src->count) continue;
     if ((k == 0 || k == 3) && !cubic) continue;
