@@ -327,8 +327,8 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
   for (int c = 0; c < e->parts.count; ++c) {
     const end_part *pc = &e->parts.part[c];
     const double narrowing = fmax(pc->weight * pc->area_f + sigma * e->H * pc->rate, 0.0);
-    e->target[c] =
-        fmin(narrowing + (1.0 - pc->weight) * pc->area_f, pc->area_f * pow(tip, pc->power));
+    const double tip_area = pc->area_f * pow(tip, pc->power);
+    e->target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, tip_area);
     if (pc->has_m && e->h_farther > 0.0) {
       /* the parabola through the areas of M, N and F (Newton's form, z from F
        * toward the end), for the share of the part that narrows like N -> F */
@@ -338,7 +338,7 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
       e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
                                             pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
     }
-    e->least[c] = tip_floor * pc->area_f * pow(tip, pc->power);
+    e->least[c] = tip_floor * tip_area;
     e->target[c] = fmax(e->target[c], e->least[c]);
   }
   erode_parts(work, full, &e->parts, e->target, e->least, e->scratch, e->raise);

@@ -58,20 +58,23 @@
  *     0.8797 -> 0.8424).  However fast the line, the parabola or the per-cell
  *     trend close an end, it keeps a tenth of the tip, A_F (2 (1 - sigma))^p
  *     / 10 cells (the deepest of F's, lowering the field if the trend took
- *     them, never past F; cells tied with the last one kept stay): the object is known to reach at least the section
- *     next to F, and a held-out slice left empty where it still is costs the
- *     95 % Hausdorff distance the image size for its outline.  organs.py
- *     every 8th: 3.1 such slices per solid -> 0, pooled Dice 0.9622 ->
- *     0.9627, pooled HD95 3.09 -> 2.81 px; with the ends at every offset
- *     (end_offsets.py, 9 solids every 8th / 16th) it costs at most 0.0014
- *     pooled Dice (a quarter of the tip instead: organs 0.9638 / 2.60 px, but
- *     a 21-slice ball with its ends anywhere every 8th 2.85 -> 34.6 px).  With no slice beyond F (a lone
- *     section: an object shorter than about two gaps) nothing tells how it
- *     ends, and it is treated as a flat end; a paraboloid closing at mid-gap,
- *     the rule before, left half of each gap empty where such an object is
- *     (padded.py, a 21-slice ball every 16th: pooled Dice 0.35 -> 0.84, pooled
- *     HD95 128 -> 2 px).  Each part's shape is eroded uniformly to meet its
- *     cap.
+ *     them, never past F; cells tied with the last one kept stay): the
+ *     object is known to reach at least the section next to F, and a
+ *     held-out slice left empty where it still is costs the 95 % Hausdorff
+ *     distance the image size for its outline.  organs.py every 8th: 3.1
+ *     such slices per solid -> 0, pooled Dice 0.9622 -> 0.9627, pooled HD95
+ *     3.09 -> 2.81 px; with the ends at every offset (end_offsets.py, 9
+ *     solids every 8th / 16th) it costs at most 0.0014 pooled Dice (a
+ *     quarter of the tip instead: organs 0.9638 / 2.60 px, but a 21-slice
+ *     ball with its ends anywhere every 8th 2.85 -> 34.6 px).  Faster or
+ *     earlier tips and rounded caps for two-section ends were measured and
+ *     not kept (validation/measurements/organs.md).  With no slice beyond F
+ *     (a lone section: an object shorter than about two gaps) nothing tells
+ *     how it ends, and it is treated as a flat end; a paraboloid closing at
+ *     mid-gap, the rule before, left half of each gap empty where such an
+ *     object is (padded.py, a 21-slice ball every 16th: pooled Dice 0.35 ->
+ *     0.84, pooled HD95 128 -> 2 px).  Each part's shape is eroded uniformly
+ *     to meet its cap.
  *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap and
  *   closes in a tip at the empty slice, a rounded one closes along its own
  *   paraboloid.  The tip: where a flat end lies inside the gap is unknown;
