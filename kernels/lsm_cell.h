@@ -44,9 +44,11 @@ LSM_FN float lsm_upwind_hamiltonian(float F, float dxm, float dxp, float dym, fl
   float ay = lsm_maxf(dym, 0.0f), by = lsm_minf(dyp, 0.0f);
   float cx = lsm_minf(dxm, 0.0f), ex = lsm_maxf(dxp, 0.0f);
   float cy = lsm_minf(dym, 0.0f), ey = lsm_maxf(dyp, 0.0f);
-  float grad_pos = LSM_SQRT(ax * ax + bx * bx + ay * ay + by * by);
-  float grad_neg = LSM_SQRT(cx * cx + ex * ex + cy * cy + ey * ey);
-  return F > 0.0f ? F * grad_pos : F * grad_neg;
+  float grad2_pos = ax * ax + bx * bx + ay * ay + by * by;
+  float grad2_neg = cx * cx + ex * ex + cy * cy + ey * ey;
+  /* One square root of the chosen side (the same value as choosing between
+   * two roots: the root is correctly rounded). */
+  return F * LSM_SQRT(F > 0.0f ? grad2_pos : grad2_neg);
 }
 
 /* ---- CFL rate (METHOD.md §3.4) --------------------------------------------------

@@ -60,7 +60,7 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, double cfl, int threa
 /* The upwind sweep is the hot loop: compiled for AVX2 as well as the baseline
  * and picked at load time (GCC function multi-versioning), same arithmetic. */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define LSM_HOT_CLONES __attribute__((target_clones("avx2", "default")))
+#define LSM_HOT_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
 #define LSM_HOT_CLONES
 #endif
