@@ -35,9 +35,9 @@ struct lsm_particles {
   uint8_t *state;
   /* correction scratch, nx*ny each: phi_plus, phi_minus, touched marks */
   float *plus, *minus;
-  /* advection scratch, 4 floats per node: F = phi - phi_target and the
-   * central-difference gradient (gx, gy) of phi, rebuilt at every stage (the
-   * 4th float is padding, never written or read) */
+  /* advection scratch, three planes of nx*ny floats (row-major, like phi
+   * without ghosts): F = phi - phi_target and the central-difference gradient
+   * gx, gy of phi, rebuilt at every stage */
   float *velocity;
   uint8_t *mark;
   uint64_t gen; /* seeding generation (0 at creation) */
@@ -116,18 +116,19 @@ PCL_INLINE float eval_phi(const lsm_particles *p, const lsm_grid *g, float x, fl
 /* One row j of the node field (lsm_pcl_node_field at every node; branch-free,
  * so it vectorises). */
 PCL_CLONES
-static void velocity_row(float *restrict v, const float *restrict c, const float *restrict t,
+static void velocity_row(float *restrict F, float *restrict gx, float *restrict gy,
+                         const float *restrict c, const float *restrict t,
                          const float *restrict dn, const float *restrict up, int j,
                          const lsm_particles *p) {
   const int nx = p->nx, ny = p->ny;
   const float idx = p->inv_dx, idy = p->inv_dy, i2dx = p->inv_2dx, i2dy = p->inv_2dy;
   for (int i = 1; i < nx - 1; ++i) /* interior columns: no clamping */
     lsm_pcl_node_field(i, j, nx, ny, c[i], t[i], c[i - 1], c[i + 1], dn[i], up[i], idx, idy, i2dx,
-                       i2dy, &v[4 * i + 0], &v[4 * i + 1], &v[4 * i + 2]);
+                       i2dy, &F[i], &gx[i], &gy[i]);
   for (int i = 0; i < nx; i += nx > 1 ? nx - 1 : 1) { /* the two edge columns */
     const int l = i > 0 ? i - 1 : 0, r = i + 1 < nx ? i + 1 : nx - 1;
     lsm_pcl_node_field(i, j, nx, ny, c[i], t[i], c[l], c[r], dn[i], up[i], idx, idy, i2dx, i2dy,
-                       &v[4 * i + 0], &v[4 * i + 1], &v[4 * i + 2]);
+                       &F[i], &gx[i], &gy[i]);
   }
 }
 
@@ -137,7 +138,9 @@ static void build_velocity(lsm_particles *p, const lsm_grid *in, const lsm_grid 
   for (int j = 0; j < ny; ++j) {
     const float *c = &LSM_AT(in, 0, j), *t = &LSM_AT(target, 0, j);
     const float *dn = &LSM_AT(in, 0, j > 0 ? j - 1 : 0), *up = &LSM_AT(in, 0, j + 1 < ny ? j + 1 : ny - 1);
-    velocity_row(p->velocity + (size_t)j * nx * 4, c, t, dn, up, j, p);
+    const size_t row = (size_t)j * nx, plane = (size_t)nx * ny;
+    velocity_row(p->velocity + row, p->velocity + plane + row, p->velocity + 2 * plane + row, c, t,
+                 dn, up, j, p);
   }
 }
 
@@ -384,7 +387,7 @@ lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_parti
   p->plus = lsm_alloc(cells, sizeof(float), err, "particle correction");
   p->minus = p->plus ? lsm_alloc(cells, sizeof(float), err, "particle correction") : NULL;
   p->mark = p->minus ? calloc(cells, 1) : NULL;
-  p->velocity = p->mark ? lsm_alloc(cells, 4 * sizeof(float), err, "particle advection") : NULL;
+  p->velocity = p->mark ? lsm_alloc(cells, 3 * sizeof(float), err, "particle advection") : NULL;
   if (!p->velocity) {
     lsm_pls_destroy(&p);
     return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot allocate correction scratch");
@@ -439,15 +442,17 @@ PCL_INLINE void sample_velocity(const float *restrict v, int nx, int ny, float x
                                 float *F, float *n_x, float *n_y) {
   float fx, fy;
   const int i = lsm_pcl_locate(x, nx, &fx), j = lsm_pcl_locate(y, ny, &fy);
-  const int a = (j * nx + i) * 4, b = a + nx * 4;
-  float f00, f10, f01, f11, gx00, gx10, gx01, gx11;
-  load_pair(v + a, &f00, &gx00);
-  load_pair(v + a + 4, &f10, &gx10);
-  load_pair(v + b, &f01, &gx01);
-  load_pair(v + b + 4, &f11, &gx11);
+  const int plane = nx * ny, a = j * nx + i, b = a + nx;
+  float f00, f10, f01, f11, gx00, gx10, gx01, gx11, gy00, gy10, gy01, gy11;
+  load_pair(v + a, &f00, &f10);
+  load_pair(v + b, &f01, &f11);
+  load_pair(v + plane + a, &gx00, &gx10);
+  load_pair(v + plane + b, &gx01, &gx11);
+  load_pair(v + 2 * plane + a, &gy00, &gy10);
+  load_pair(v + 2 * plane + b, &gy01, &gy11);
   *F = lsm_pcl_bilinear(f00, f10, f01, f11, fx, fy);
   const float gx = lsm_pcl_bilinear(gx00, gx10, gx01, gx11, fx, fy);
-  const float gy = lsm_pcl_bilinear(v[a + 2], v[a + 6], v[b + 2], v[b + 6], fx, fy);
+  const float gy = lsm_pcl_bilinear(gy00, gy10, gy01, gy11, fx, fy);
   lsm_pcl_normal(gx, gy, n_x, n_y);
 }
 
