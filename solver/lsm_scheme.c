@@ -57,8 +57,11 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, double cfl, int threa
 
 /* ---- one stage -------------------------------------------------------------------- */
 
-/* The upwind sweep is the hot loop: compiled for AVX2 as well as the baseline
- * and picked at load time (GCC function multi-versioning), same arithmetic. */
+/* The upwind sweep is the hot loop: compiled for AVX-512F and AVX2 as well as
+ * the baseline and picked at load time (GCC function multi-versioning).  Every
+ * clone gives the same bits: C17 mode contracts no a*b+c into FMA, and the
+ * vector square root, like the scalar one, is correctly rounded.  (The CFL
+ * sweep gained nothing from the clones: 3.9 % of a 512^2 run either way.) */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define LSM_HOT_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
