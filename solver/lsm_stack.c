@@ -8,6 +8,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "kernels/lsm_cell.h"
 #include "lsm_ends.h"
 #include "lsm_parts.h"
 #include "lsm_register.h"
@@ -852,7 +853,9 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
       const float *f = &LSM_AT(pf, 0, j), *a = &LSM_AT(pa, 0, j), *b = &LSM_AT(pb, 0, j);
       const float *rv = row + (size_t)j * mix->nx;
       float *o = &LSM_AT(mix, 0, j);
-      for (int i = 0; i < mix->nx; ++i) o[i] = fminf(fmaxf(f[i], a[i]), fmaxf(rv[i], b[i]));
+      /* lsm_minf / lsm_maxf vectorise; fminf / fmaxf were library calls (4 %
+       * of a 512^2 run), and differ only for NaN, which the morph never holds */
+      for (int i = 0; i < mix->nx; ++i) o[i] = lsm_minf(lsm_maxf(f[i], a[i]), lsm_maxf(rv[i], b[i]));
     }
     if (g->slope_a) {
       /* Cubic profile: the spline, plus the morph's departure from the linear
