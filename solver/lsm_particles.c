@@ -414,8 +414,8 @@ void lsm_pls_begin_step(lsm_particles *p, int stages) {
  * a time (load_pair): GCC's generic tuning emits no gather instructions, and
  * with them (-mtune=icelake-server) the bunny's pls run was 18 % slower on
  * this AMD EPYC.  F and the unit normal N at a particle come from the node
- * field v (F, gx, gy per node), bilinearly interpolated; the new position is
- * lsm_pcl_stage_coord, as on OpenCL. */
+ * field v (three planes: F, gx, gy), bilinearly interpolated; the new
+ * position is lsm_pcl_stage_coord, as on OpenCL. */
 PCL_INLINE float float_bits(uint32_t bits) {
   float f;
   memcpy(&f, &bits, sizeof f);
