@@ -20,6 +20,9 @@ MONTAGE_SLICES = [7, 21, 45, 69, 79, 93, 101]  # 1-based, all held out at K = 8
 def main():
     s = vlib.Study(5, "Real data: the Stanford bunny", sys.argv)
     truth_dir = os.environ.get("LSMORPH_BUNNY", vlib.BUNNY_DIR)
+    if not os.path.isdir(truth_dir):
+        raise vlib.StepFailed("%s: no such folder; set LSMORPH_BUNNY to the folder of the 120 "
+                              "bunny slices (shared/data/bunny next to the repository)" % truth_dir)
     truth_files = vlib.list_pngs(truth_dir)
     if len(truth_files) < 20:
         raise vlib.StepFailed("%s: expected the 120 bunny slices, found %d" % (
