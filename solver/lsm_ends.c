@@ -243,6 +243,7 @@ struct lsm_end {
   double H;             /* the gap's height */
   double trend_reach;   /* how far past F the per-cell trend is carried (h_N) */
   double h_farther;     /* |z_M - z_N| */
+  int has_beyond;       /* there is a slice N beyond F */
   lsm_grid *slope;      /* per cell max(m, 0), m = (phi_F - phi_N) / h_N (trend) */
   end_parts parts;      /* F's components and how each ends (trend) */
   double *target;       /* per part: cells kept at the current sigma, at most */
@@ -287,6 +288,7 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
   if (st == LSM_OK) {
     const float hn = beyond ? (float)h_beyond : 1.0f;
     e->trend_reach = hn;
+    e->has_beyond = beyond != NULL;
     for (int j = 0; j < full->ny; ++j)
       for (int i = 0; i < full->nx; ++i)
         LSM_AT(e->slope, i, j) =
@@ -335,6 +337,14 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
       const double hn = e->trend_reach, hm = e->h_farther, z = sigma * e->H;
       const double d1 = (pc->area_f - pc->area_n) / hn, d0 = (pc->area_n - pc->area_m) / hm;
       const double parabola = pc->area_f + d1 * z + (d1 - d0) / (hn + hm) * z * (z + hn);
+      e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
+                                            pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
+    } else if (e->has_beyond) {
+      /* no third section: the parabola through the areas of N and F and zero
+       * at the empty slice, the latest a quadratic area can close */
+      const double hn = e->trend_reach, z = sigma * e->H;
+      const double d1 = (pc->area_f - pc->area_n) / hn, d2 = -pc->area_f / e->H;
+      const double parabola = pc->area_f + d1 * z + (d2 - d1) / (e->H + hn) * z * (z + hn);
       e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
                                             pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
     }

@@ -55,7 +55,20 @@
  *     padded.py every 16th 0.8998 -> 0.9013, 6.18 -> 6.01 px; meshes.py every
  *     16th 0.8984 -> 0.8994; atlas.py every 8th 0.8759 -> 0.8749 (the left
  *     caudate sliced sagittally, whose thin tail goes on past a peak in area,
- *     0.8797 -> 0.8424).  However fast the line, the parabola or the per-cell
+ *     0.8797 -> 0.8424).  With N but no M (an object crossed by two
+ *     sections) the empty slice gives the parabola its third point: the area
+ *     is also capped by the parabola through the areas of N and F and zero
+ *     at the empty slice (the same share), the latest a quadratic area
+ *     through N and F can close, since the object is gone by the empty
+ *     slice; a cylinder crossed by two sections keeps 5/8 of F at mid-gap.
+ *     organs.py every 16th 0.8802 -> 0.8882, 11.22 -> 10.42 px; the same
+ *     solids with every other slice dropped, every 8th, 0.8741 -> 0.8833;
+ *     padded.py every 8th 0.9630 -> 0.9669 (a 14-slice blob 0.9102 ->
+ *     0.9610); end_offsets.py every 8th blob +0.028, lens +0.030, disc
+ *     +0.007, no shape worse; bunny, meshes and strides below 8 unchanged;
+ *     atlas.py every 8th 0.8749 -> 0.8734, every 16th 0.7162 -> 0.7160 (three
+ *     short ends that stay flat lose 0.02 to 0.04, four stacks gain).
+ *     However fast the line, the parabola or the per-cell
  *     trend close an end, it keeps a tenth of the tip, A_F (2 (1 - sigma))^p
  *     / 10 cells (the deepest of F's, lowering the field if the trend took
  *     them, never past F; cells tied with the last one kept stay): the
@@ -67,17 +80,17 @@
  *     solids every 8th / 16th) it costs at most 0.0014 pooled Dice (a
  *     quarter of the tip instead: organs 0.9638 / 2.60 px, but a 21-slice
  *     ball with its ends anywhere every 8th 2.85 -> 34.6 px).  Faster or
- *     earlier tips and rounded caps for two-section ends were measured and
- *     not kept (validation/measurements/organs.md).  With no slice beyond F
+ *     earlier tips and faster rounded caps for two-section ends were
+ *     measured and not kept (validation/measurements/organs.md).  With no slice beyond F
  *     (a lone section: an object shorter than about two gaps) nothing tells
  *     how it ends, and it is treated as a flat end; a paraboloid closing at
  *     mid-gap, the rule before, left half of each gap empty where such an
  *     object is (padded.py, a 21-slice ball every 16th: pooled Dice 0.35 ->
  *     0.84, pooled HD95 128 -> 2 px).  Each part's shape is eroded uniformly
  *     to meet its cap.
- *   A flat end (cylinder, the bunny's base) thus stays full up to mid-gap and
- *   closes in a tip at the empty slice, a rounded one closes along its own
- *   paraboloid.  The tip: where a flat end lies inside the gap is unknown;
+ *   A flat end seen by three sections (cylinder, the bunny's base) thus
+ *   stays full up to mid-gap and closes in a tip at the empty slice, a
+ *   rounded one closes along its own paraboloid.  The tip: where a flat end lies inside the gap is unknown;
  *   mid-gap is the median, but a slice left empty where the object is present
  *   costs the pooled 95 % Hausdorff distance the image size for its whole
  *   outline, and an object cut one slice above the empty slice loses half a

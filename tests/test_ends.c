@@ -127,9 +127,17 @@ static void test_flat_end(void **state) {
   lsm_grid_destroy(&phi);
 }
 
-/* Cubic profile, F narrower than N (a rounded end): the area follows the line
- * through N's and F's areas, and past mid-gap also a cone's tip,
- * A_F (2 (1 - sigma))^2. */
+/* The parabola through the areas of N (h before F), F and zero at the empty
+ * slice (H past F), at z past F. */
+static double two_section_parabola(double a_n, double a_f, double h, double H, double z) {
+  const double d1 = (a_f - a_n) / h, d2 = -a_f / H;
+  return a_f + d1 * z + (d2 - d1) / (H + h) * z * (z + h);
+}
+
+/* Cubic profile, F narrower than N (a rounded end), no slice beyond N: the
+ * area follows the line through N's and F's areas or, where it lies lower,
+ * the parabola through them and zero at the empty slice, and past mid-gap
+ * also a cone's tip, A_F (2 (1 - sigma))^2. */
 static void test_narrowing_end(void **state) {
   (void)state;
   const disc f = {47.5, 47.5, 20.0}, n = {47.5, 47.5, 24.0};
@@ -138,9 +146,11 @@ static void test_narrowing_end(void **state) {
   for (double sigma = 0.125; sigma < 0.95; sigma += 0.125) {
     const double a = end_area(phi_f, phi_n, h, H, LSM_END_TREND, sigma);
     const double line = a_f - sigma * H * (a_n - a_f) / h;
+    const double parabola = two_section_parabola(a_n, a_f, h, H, sigma * H);
     const double tip = a_f * pow(fmin(1.0, 2.0 * (1.0 - sigma)), 2.0);
-    const double cap = fmin(line, tip);
-    print_message("sigma %.3f: %.0f cells, line %.0f, tip %.0f\n", sigma, a, line, tip);
+    const double cap = fmin(fmin(line, parabola), tip);
+    print_message("sigma %.3f: %.0f cells, line %.0f, parabola %.0f, tip %.0f\n", sigma, a, line,
+                  parabola, tip);
     assert_true(a <= cap);
     assert_true(a >= cap - 0.05 * a_f);
   }
@@ -151,8 +161,8 @@ static void test_narrowing_end(void **state) {
 /* The sections of a ball of radius 40 at z = -4 (M), 12 (N) and 28 (F), the
  * empty slice at 44: the area of a ball's section is quadratic in z, so the
  * parabola through the areas of M, N and F follows the ball's own end,
- * pi (40^2 - z^2), where the line through N and F alone (no M) keeps far too
- * much (at mid-gap, z = 36: 955 cells against the line's 1558). */
+ * pi (40^2 - z^2).  Without M, the parabola through N, F and zero at the
+ * empty slice closes at z = 44, not at the ball's z = 40, and keeps more. */
 static void test_rounded_end(void **state) {
   (void)state;
   const double radius = 40.0, zm = -4.0, zn = 12.0, zf = 28.0, H = 16.0;
@@ -165,14 +175,50 @@ static void test_rounded_end(void **state) {
     lsm_grid *work = end_at_m(phi_f, phi_n, zf - zn, phi_m, zn - zm, H, LSM_END_TREND, sigma);
     const double a = area(work);
     const double line = end_area(phi_f, phi_n, zf - zn, H, LSM_END_TREND, sigma);
-    print_message("sigma %.3f: %.0f cells, ball %.0f, without M %.0f\n", sigma, a, ball, line);
+    const double two = two_section_parabola(PI * n.r * n.r, PI * f.r * f.r, zf - zn, H, z - zf);
+    print_message("sigma %.3f: %.0f cells, ball %.0f, without M %.0f (parabola %.0f)\n", sigma, a,
+                  ball, line, two);
     assert_true(fabs(a - ball) <= 0.05 * ball + 20.0);
-    assert_true(line > 1.1 * ball);
+    assert_true(line > ball + 0.05 * PI * f.r * f.r);
+    assert_true(fabs(line - two) <= 0.05 * two + 20.0);
     lsm_grid_destroy(&work);
   }
   lsm_grid_destroy(&phi_m);
   lsm_grid_destroy(&phi_n);
   lsm_grid_destroy(&phi_f);
+}
+
+/* Two sections only (N, F, nothing beyond N), F as wide as N or wider: the
+ * area follows the parabola through the areas of N and F and zero at the
+ * empty slice (a cylinder crossed by two sections: A_F (1 - sigma / 2 -
+ * sigma^2 / 2) with h = H), never above F's, with a tenth of the tip kept. */
+static void test_two_section_end(void **state) {
+  (void)state;
+  const disc f = {47.5, 47.5, 20.0}, wider = {47.5, 47.5, 20.0}, narrower = {47.5, 47.5, 16.0};
+  lsm_grid *phi_f = discs_phi(&f, 1), *phi_same = discs_phi(&wider, 1);
+  lsm_grid *phi_n = discs_phi(&narrower, 1);
+  const double a_f = area(phi_f), h = 8.0, H = 8.0;
+  const lsm_grid *beyond[2] = {phi_same, phi_n};
+  for (int t = 0; t < 2; ++t) {
+    const double a_n = area(beyond[t]);
+    for (double sigma = 0.125; sigma < 0.95; sigma += 0.125) {
+      const double a = end_area(phi_f, beyond[t], h, H, LSM_END_TREND, sigma);
+      const double parabola = two_section_parabola(a_n, a_f, h, H, sigma * H);
+      const double tip = a_f * fmin(1.0, 2.0 * (1.0 - sigma)); /* p = 1: no narrowing */
+      const double cap = fmax(fmin(fmin(parabola, tip), a_f), 0.1 * tip);
+      print_message("A_N %.0f, sigma %.3f: %.0f cells, parabola %.0f, tip %.0f\n", a_n, sigma, a,
+                    parabola, tip);
+      assert_true(a <= cap + 1e-9);
+      /* (the erosion keeps or drops whole rings of cells tied in phi) */
+      assert_true(a >= cap - 0.05 * a_f);
+    }
+    /* the cylinder: 1 - sigma / 2 - sigma^2 / 2 of F at mid-gap, 5/8 */
+    if (t == 0)
+      assert_close(end_area(phi_f, phi_same, h, H, LSM_END_TREND, 0.5), 0.625 * a_f, 0.05 * a_f);
+  }
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_same);
+  lsm_grid_destroy(&phi_n);
 }
 
 /* M does not change an end that keeps its size (a cylinder: M, N and F the
@@ -246,12 +292,13 @@ static void test_parts_end_apart(void **state) {
 
 /* The per-cell trend of N -> F is carried at most h_N past F: with a slice
  * N only 1 below F and a gap of 16, an F that does not narrow in area (N
- * the same disc shifted) keeps moving by at most N -> F's step. */
+ * the same disc shifted, and M beyond it too, so that no parabola of the
+ * areas caps the end) keeps moving by at most N -> F's step. */
 static void test_trend_reach(void **state) {
   (void)state;
   const disc f = {50.5, 47.5, 20.0}, n = {49.5, 47.5, 20.0};
   lsm_grid *phi_f = discs_phi(&f, 1), *phi_n = discs_phi(&n, 1);
-  lsm_grid *work = end_at(phi_f, phi_n, 1.0, 16.0, LSM_END_TREND, 0.5);
+  lsm_grid *work = end_at_m(phi_f, phi_n, 1.0, phi_n, 1.0, 16.0, LSM_END_TREND, 0.5);
   /* per cell phi_F + min(sigma H, h_N) max(phi_F - phi_N, 0) / h_N: the
    * trailing side rises by at most one cell, never by sigma H = 8 */
   double worst = 0.0;
@@ -312,6 +359,7 @@ int main(void) {
       cmocka_unit_test(test_flat_end),
       cmocka_unit_test(test_narrowing_end),
       cmocka_unit_test(test_rounded_end),
+      cmocka_unit_test(test_two_section_end),
       cmocka_unit_test(test_tip_floor),
       cmocka_unit_test(test_flat_end_with_m),
       cmocka_unit_test(test_parts_end_apart),

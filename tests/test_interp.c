@@ -445,33 +445,36 @@ static void test_end_neighbour_flat(void **state) {
 }
 
 /* Where the object ends (default options, cubic): an empty slice at z = 0,
- * the last non-empty one F at z = 8, the slice N beyond it at z = 16.
- *   flat end (F = N): F's section, whole, up to mid-gap; from there a tip
+ * the last non-empty one F at z = 8, the slice N beyond it at z = 16 and,
+ * where a third section is given, M at z = 24.
+ *   flat end (F = N = M, a cylinder): F's section, whole, up to mid-gap; from there a tip
  *     whose radius shrinks linearly to 0 at the empty slice, area
  *     A_F (2 (1 - sigma))^2 at fraction sigma of the way from F;
  *   paraboloid end (areas of N and F on a line that reaches 0 at z = 4): the
  *     area at z = 6 at most the line's, A_F / 2, and not far below it; past
  *     z = 4 a tenth of the cone's tip;
- *   no slice beyond F: a paraboloid closing at mid-gap (a lone section);
+ *   no slice beyond F (a lone section): a flat end;
  *   moving end (N and F do not overlap): the section keeps moving at the
- *     centroid velocity of N -> F, 2 px per unit z. */
+ *     centroid velocity of N -> F, 2 px per unit z;
+ *   two sections only (F = N, no M): the area follows the parabola through
+ *     the areas of N and F and zero at the empty slice, 5/8 of F's at mid-gap. */
 static void test_object_ends(void **state) {
   (void)state;
-  const double z[3] = {0.0, 8.0, 16.0};
-  const double r_flat[3] = {0.0, 20.0, 20.0};
+  const double z[4] = {0.0, 8.0, 16.0, 24.0};
+  const double r_flat[4] = {0.0, 20.0, 20.0, 20.0};
   const double r_para[3] = {0.0, 10.0, sqrt(300.0)};
-  const double r_moving[3] = {0.0, 8.0, 8.0}, cx_moving[3] = {0.0, 40.0, 56.0};
-  const double r_bulge[3] = {0.0, 20.0, 22.0}; /* narrows by 21 % in area toward the end */
+  const double r_moving[4] = {0.0, 8.0, 8.0, 8.0}, cx_moving[4] = {0.0, 40.0, 56.0, 72.0};
+  const double r_bulge[4] = {0.0, 20.0, 22.0, 24.0}; /* narrows by 21 % in area toward the end */
   struct {
     const char *name;
     const double *radius, *cx;
     size_t slices;
     double tip_power; /* 0: the area line closes the end by mid-gap */
-  } cases[] = {{"flat", r_flat, NULL, 3, 1.0},
+  } cases[] = {{"flat", r_flat, NULL, 4, 1.0},
                {"paraboloid", r_para, NULL, 3, 0.0},
                {"no slice beyond", r_flat, NULL, 2, 1.0}, /* a lone section: a flat end */
-               {"moving", r_moving, cx_moving, 3, 1.0},
-               {"narrowing slowly", r_bulge, NULL, 3, 2.0}};
+               {"moving", r_moving, cx_moving, 4, 1.0},
+               {"narrowing slowly", r_bulge, NULL, 4, 2.0}};
   for (size_t t = 0; t < sizeof cases / sizeof cases[0]; ++t) {
     disc_source src = {96, cases[t].radius, cases[t].cx};
     lsm_stack_opts o;
@@ -523,18 +526,33 @@ static void test_object_ends(void **state) {
     if (t == 3) assert_true(fabs(cx6 - 36.0) <= 0.5); /* 40 - 2 px per unit z * 2 */
     record_free(&rec);
   }
+  {
+    disc_source src = {96, r_flat, NULL};
+    lsm_stack_opts o;
+    lsm_stack_opts_default(&o);
+    o.dz = 1.0;
+    record rec = {0};
+    run_stack(&src, z, 3, &o, &rec);
+    const double area_f = (double)slice_inside(&rec, slice_at(&rec, 8.0), NULL);
+    const double area4 = (double)slice_inside(&rec, slice_at(&rec, 4.0), NULL);
+    print_message("end two sections: area at z = 4: %.0f (5/8 of F %.0f)\n", area4,
+                  0.625 * area_f);
+    assert_true(fabs(area4 - 0.625 * area_f) <= 0.05 * area_f);
+    record_free(&rec);
+  }
   /* Uneven gaps: N -> F moves 16 px in 1 unit, the end gap is 400 units long.
    * The extrapolated end stops at the image border (x = 0) instead of 6400 px
    * away, so the canvas stays bounded; at a quarter of the gap the centroid
    * is a quarter of the way from 40 to 0; the shape trend measured over 1
    * unit is not multiplied by 100. */
-  const double z_long[3] = {0.0, 400.0, 401.0};
-  disc_source src = {96, r_moving, cx_moving};
+  const double z_long[4] = {0.0, 400.0, 401.0, 402.0};
+  const double cx_long[4] = {0.0, 40.0, 56.0, 72.0};
+  disc_source src = {96, r_moving, cx_long};
   lsm_stack_opts o;
   lsm_stack_opts_default(&o);
   o.dz = 1.0;
   record rec = {0};
-  run_stack(&src, z_long, 3, &o, &rec);
+  run_stack(&src, z_long, 4, &o, &rec);
   double cx300 = 0.0;
   const size_t area300 = slice_inside(&rec, slice_at(&rec, 300.0), &cx300);
   print_message("end moving, long gap: area at z = 300: %zu, centroid x %.2f\n", area300, cx300);
