@@ -787,6 +787,16 @@ static void add_pls_stats(lsm_pair_stats *ps, const lsm_morph *m) {
   ps->pls_steps += q->steps;
 }
 
+/* The two morphs of a gap joined at one cell (run_gap_morph): fwd =
+ * phi_AB(s), rev = phi_BA(1 - s), a = phi_A, b = phi_B, thin_outside the
+ * distance below which an outside is thin. */
+static inline float two_sided(float fwd, float rev, float a, float b, float thin_outside) {
+  const float insides = lsm_minf(lsm_maxf(fwd, a), lsm_maxf(rev, b));
+  const float outsides = lsm_maxf(lsm_minf(fwd, a), lsm_minf(rev, b));
+  const float out = lsm_maxf(a, b), in = lsm_minf(a, b);
+  return (in < 0.0f && out > 0.0f && out < thin_outside && out < -in) ? outsides : insides;
+}
+
 /* Two-sided level-set morph of a gap (both slices non-empty).
  *
  * The morph equation moves a front point with normal speed -phi_T: parts of
@@ -798,6 +808,17 @@ static void add_pls_stats(lsm_pair_stats *ps, const lsm_morph *m) {
  * A), and the reverse morph B -> A at 1 - s where B retreats (inside B):
  *     phi(s) = min( max(phi_AB(s), phi_A), max(phi_BA(1 - s), phi_B) ).
  * Inside A and B both terms are negative; outside both, both are positive.
+ * The equation is unchanged under phi -> -phi, so the outside has the same
+ * lag: a thin notch or hole of B (a sulcus, a gap between two lobes) is
+ * opened late by A -> B, and the min above, a union of the two insides,
+ * keeps it shut.  Where a cell lies less than two cells outside one slice
+ * and deeper inside the other (thin_outside), the outsides are joined
+ * instead: phi(s) = max( min(phi_AB, phi_A), min(phi_BA(1 - s), phi_B) ).
+ * (A brain's cortical surface, npm brainbrowser, voxelised at 128^3 and
+ * sliced three ways, every 4th / 8th / 16th slice: pooled HD95 5.13 ->
+ * 3.78, 6.33 -> 5.27, 8.22 -> 7.77 px, pooled Dice 0.9582 -> 0.9573, 0.9350
+ * -> 0.9335, 0.8993 -> 0.8968; the other validation sets move by at most
+ * 0.0005 pooled Dice.)
  * The reverse snapshots are needed in the opposite order, so they are parked
  * in an anonymous temporary file, one working grid each. */
 static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const double *fs,
@@ -849,13 +870,14 @@ static lsm_status run_gap_morph(stack_run *r, gap *g, const double *zs, const do
       st = lsm_fail(err, lsm_morph_error(fwd)->status, NULL, "%s", lsm_morph_error(fwd)->msg);
       break;
     }
+    const float thin_outside = 2.0f * fmaxf(mix->dx, mix->dy);
     for (int j = 0; j < mix->ny; ++j) {
       const float *f = &LSM_AT(pf, 0, j), *a = &LSM_AT(pa, 0, j), *b = &LSM_AT(pb, 0, j);
       const float *rv = row + (size_t)j * mix->nx;
       float *o = &LSM_AT(mix, 0, j);
       /* lsm_minf / lsm_maxf vectorise; fminf / fmaxf were library calls (4 %
        * of a 512^2 run), and differ only for NaN, which the morph never holds */
-      for (int i = 0; i < mix->nx; ++i) o[i] = lsm_minf(lsm_maxf(f[i], a[i]), lsm_maxf(rv[i], b[i]));
+      for (int i = 0; i < mix->nx; ++i) o[i] = two_sided(f[i], rv[i], a[i], b[i], thin_outside);
     }
     if (g->slope_a) {
       /* Cubic profile: the spline, plus the morph's departure from the linear

