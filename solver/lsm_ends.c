@@ -331,20 +331,21 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
     const double narrowing = fmax(pc->weight * pc->area_f + sigma * e->H * pc->rate, 0.0);
     const double tip_area = pc->area_f * pow(tip, pc->power);
     e->target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, tip_area);
-    if (pc->has_m && e->h_farther > 0.0) {
-      /* the parabola through the areas of M, N and F (Newton's form, z from F
-       * toward the end), for the share of the part that narrows like N -> F */
-      const double hn = e->trend_reach, hm = e->h_farther, z = sigma * e->H;
-      const double d1 = (pc->area_f - pc->area_n) / hn, d0 = (pc->area_n - pc->area_m) / hm;
-      const double parabola = pc->area_f + d1 * z + (d1 - d0) / (hn + hm) * z * (z + hn);
-      e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
-                                            pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
-    } else if (e->has_beyond) {
-      /* no third section: the parabola through the areas of N and F and zero
-       * at the empty slice, the latest a quadratic area can close */
+    if (e->has_beyond) {
+      /* the parabola through the areas of N and F and a third point (Newton's
+       * form, z from F toward the end): M's area beyond N, or with no third
+       * section zero at the empty slice, the latest a quadratic area can
+       * close; it caps the share of the part that narrows like N -> F */
       const double hn = e->trend_reach, z = sigma * e->H;
-      const double d1 = (pc->area_f - pc->area_n) / hn, d2 = -pc->area_f / e->H;
-      const double parabola = pc->area_f + d1 * z + (d2 - d1) / (e->H + hn) * z * (z + hn);
+      const double d1 = (pc->area_f - pc->area_n) / hn;
+      double curvature;
+      if (pc->has_m && e->h_farther > 0.0) {
+        const double hm = e->h_farther, d0 = (pc->area_n - pc->area_m) / hm;
+        curvature = (d1 - d0) / (hn + hm);
+      } else {
+        curvature = (-pc->area_f / e->H - d1) / (e->H + hn);
+      }
+      const double parabola = pc->area_f + d1 * z + curvature * z * (z + hn);
       e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
                                             pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
     }

