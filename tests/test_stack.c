@@ -525,6 +525,47 @@ static void test_thin_outside(void **state) {
   sink_free(&rb.sink);
 }
 
+/* Inside cells with x >= x0 (the right-hand piece below). */
+static size_t area_right_of(const float *phi, int w, int h, int x0) {
+  size_t n = 0;
+  for (int j = 0; j < h; ++j)
+    for (int i = x0; i < w; ++i) n += phi[(size_t)j * w + i] <= 0.0f;
+  return n;
+}
+
+/* A small piece of A (r 4 at x = 86) that B (z = 20) does not continue, next
+ * to a body (r 15, then 10, at the centre) that goes on.  Where the slice
+ * before A (z = 0) joins it to that body (a bar from the body to it), it is a
+ * branch splitting off the body: it recedes toward the body's section on B
+ * and is gone by z = 13.  Where it is its own piece at z = 0 too, it is an
+ * object ending in the gap (the halfway rule): still there at z = 13. */
+static void test_branch_recedes(void **state) {
+  (void)state;
+  const double z[3] = {0.0, 10.0, 20.0};
+  const slice_def a = {2, {disc(C, C, 15), disc(86, C, 4)}}, b = {1, {disc(C, C, 10)}};
+  const slice_def joined = {3, {disc(C, C, 20), rect(60, 46, 92, 54, 0), disc(86, C, 6)}};
+  const slice_def apart = {2, {disc(C, C, 20), disc(86, C, 5)}};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.dz = 1.0;
+  for (int branch = 0; branch < 2; ++branch) {
+    const slice_def defs[3] = {branch ? joined : apart, a, b};
+    run r;
+    assert_int_equal(run_stack(&r, W, H, 0, defs, z, 3, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 21);
+    size_t piece[21];
+    for (int k = 0; k <= 20; ++k) piece[k] = area_right_of(r.sink.s[k].phi, W, H, 78);
+    print_message("%s: piece areas z = 10..20: %zu %zu %zu %zu %zu %zu %zu %zu %zu %zu %zu\n",
+                  branch ? "branch" : "own piece", piece[10], piece[11], piece[12], piece[13], piece[14],
+                  piece[15], piece[16], piece[17], piece[18], piece[19], piece[20]);
+    assert_true(piece[10] > 40);
+    if (branch) assert_int_equal(piece[13], 0);
+    else assert_true(piece[13] > 0);
+    for (int k = 18; k <= 20; ++k) assert_int_equal(piece[k], 0);
+    sink_free(&r.sink);
+  }
+}
+
 /* A disc next to an empty slice, with no slice beyond it (a lone section).
  * Linear profile: the object closes by mid-gap.  Vanishing (disc at z = 0,
  * empty at z = 10): areas strictly decrease while non-empty, the last
@@ -948,6 +989,7 @@ int main(void) {
       cmocka_unit_test(test_output_heights),
       cmocka_unit_test(test_merge_split),
       cmocka_unit_test(test_thin_outside),
+      cmocka_unit_test(test_branch_recedes),
       cmocka_unit_test(test_end_parts),
       cmocka_unit_test(test_vanish_appear),
       cmocka_unit_test(test_align),
