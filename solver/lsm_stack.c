@@ -646,7 +646,8 @@ static void mark_branches(const lsm_grid *phi_x, const int32_t *label_x, const l
  * it at speed R_C instead of pulling it toward far-away shapes (with the
  * distance to them as speed, a small component would vanish at once).
  * A branch is left alone: C that was one piece, on the slice beyond x
- * (phi_before, NULL if none), with a larger matched component has just split
+ * (phi_before; NULL if none, or with the linear profile, which reads only the
+ * pair), with a larger matched component has just split
  * off a body that goes on, and it recedes toward that body's shapes on the
  * other side, as the interpolation makes it (atlas.py every 2nd slice:
  * pooled HD95 1.42 -> 1.35 px, the brainstem cut axially 3.61 -> 1.41 px;
