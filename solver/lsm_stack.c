@@ -550,8 +550,7 @@ static void gap_paste_parts(const gap *g, double s, float *out) {
  * (padded, meshes) 0.8985 -> 0.8998, 0.8954 -> 0.8984; with the ends at every
  * offset (end_offsets.py, where the first and last kept slices are empty)
  * the means do not move. */
-static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err) {
-  const lsm_stack_opts *o = r->opts;
+static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2], lsm_err *err) {
   lsm_grid *outer[2] = {NULL, NULL}; /* secants beyond A (prev -> A) and beyond B (B -> next) */
   int end[2] = {0, 0};               /* that neighbour is an empty slice */
   float end_secant[2] = {0.0f, 0.0f}, h_outer[2] = {1.0f, 1.0f};
@@ -571,10 +570,8 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
       end_secant[side] = side ? R / h : -R / h;
       continue;
     }
-    if ((st = lsm_grid_clone(g->phi_a, &outer[side], err)) != LSM_OK) break;
-    lsm_grid *sec = outer[side];
-    st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], sec, err);
-    for (int j = 0; st == LSM_OK && j < sec->ny; ++j)
+    lsm_grid *sec = outer[side] = beyond[side]; /* the neighbour's phi, made its secant */
+    for (int j = 0; j < sec->ny; ++j)
       for (int i = 0; i < sec->nx; ++i) {
         float *v = &LSM_AT(sec, i, j);
         *v = side ? (*v - LSM_AT(own, i, j)) / h : (LSM_AT(own, i, j) - *v) / h;
@@ -599,8 +596,6 @@ static lsm_status gap_slopes(stack_run *r, const window *w, gap *g, lsm_err *err
           *pm = d;
       }
   }
-  lsm_grid_destroy(&outer[0]);
-  lsm_grid_destroy(&outer[1]);
   return st;
 }
 
@@ -725,27 +720,30 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
       o->input == LSM_INPUT_MASK && !o->per_iteration && !g->f.aligned)
     st = gap_parts(r, w, g, err);
-  if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND && !g->rest_empty) {
+  const int caps = !a->empty && !b->empty && o->method != LSM_METHOD_BLEND && !g->rest_empty;
+  const int slopes = o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration &&
+                     !g->rest_empty;
+  /* phi of the non-empty neighbours, prev in A's place and next in B's: read
+   * by the branch test of cap_unmatched, then made secants by gap_slopes */
+  lsm_grid *beyond[2] = {NULL, NULL};
+  for (int side = 0; side < 2 && st == LSM_OK && (caps || slopes); ++side) {
+    const int k = side ? 3 : 0;
+    if (!window_usable(w, k)) continue;
+    st = lsm_grid_create(nx, ny, h, h, &beyond[side], err);
+    if (st == LSM_OK)
+      st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], beyond[side], err);
+  }
+  if (st == LSM_OK && caps) {
     /* (blend stays the classic baseline, without this rule)
      * both directions see the original sets: A's components against B's
      * inside, then B's against A's (lowering phi_b inside A's unmatched
      * components leaves it positive there, so B's inside is unchanged) */
-    lsm_grid *before[2] = {NULL, NULL}; /* prev in A's place, next in B's */
-    for (int side = 0; side < 2 && st == LSM_OK; ++side) {
-      const int k = side ? 3 : 0;
-      if (!window_usable(w, k)) continue;
-      st = lsm_grid_create(nx, ny, h, h, &before[side], err);
-      if (st == LSM_OK)
-        st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], before[side], err);
-    }
-    if (st == LSM_OK) st = cap_unmatched(g->phi_a, g->phi_b, before[0], err);
-    if (st == LSM_OK) st = cap_unmatched(g->phi_b, g->phi_a, before[1], err);
-    lsm_grid_destroy(&before[0]);
-    lsm_grid_destroy(&before[1]);
+    st = cap_unmatched(g->phi_a, g->phi_b, beyond[0], err);
+    if (st == LSM_OK) st = cap_unmatched(g->phi_b, g->phi_a, beyond[1], err);
   }
-  if (st == LSM_OK && o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration &&
-      !g->rest_empty)
-    st = gap_slopes(r, w, g, err);
+  if (st == LSM_OK && slopes) st = gap_slopes(w, g, beyond, err);
+  lsm_grid_destroy(&beyond[0]);
+  lsm_grid_destroy(&beyond[1]);
   if (st != LSM_OK) {
     gap_free(g);
     return st;
