@@ -11,7 +11,7 @@ more than one piece.
 
     /usr/bin/python3 validation/atlas.py [BUILD_DIR] [--strides 2,4,8]
         [--shapes caudate-L-z,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
 
 A shape is STRUCTURE-AXIS, AXIS one of z (axial slices), y (coronal), x
 (sagittal); with no --shapes every structure along every axis (33 stacks).
@@ -89,9 +89,9 @@ def structure(image, names, hemisphere, level, name):
 
 
 def main():
-    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
+    lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
         "--strides": "2,4,8", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
-        "--shapes": ",".join("%s-%s" % (s, a) for s in STRUCTURES for a in "zyx")}, "atlas")
+        "--shapes": ",".join("%s-%s" % (s, a) for s in STRUCTURES for a in "zyx")}), "atlas")
     image, names = load_atlas(meshes.cache_dir())
 
     def stacks():
@@ -105,8 +105,7 @@ def main():
                 raise SystemExit("atlas: structure %s has no voxels" % name)
             yield shape, padded.cut(np.moveaxis(mask, "zyx".index(axis), 0))
 
-    padded.score_table(lsm, stacks(), [int(v) for v in opts["--strides"].split(",")],
-                       opts["--methods"].split(","), extra)
+    padded.score_table(lsm, stacks(), opts, extra)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ side.
 
     /usr/bin/python3 validation/ct.py [BUILD_DIR] [--strides 2,4,8]
         [--shapes nodule-z,nodule-y,nodule-x] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
 
 Needs python3-pydicom (Debian) to read the DICOM file.  The package (ami.js
 0.33.0, 10 MB) is fetched once with `npm pack` into $LSMORPH_MESH_CACHE
@@ -63,9 +63,9 @@ def crop(stack, margin=3):
 
 
 def main():
-    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
+    lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
         "--strides": "2,4,8", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
-        "--shapes": "nodule-z,nodule-y,nodule-x"}, "ct")
+        "--shapes": "nodule-z,nodule-y,nodule-x"}), "ct")
     volume = load_nodule(meshes.cache_dir())
 
     def stacks():
@@ -75,8 +75,7 @@ def main():
                 raise SystemExit("ct: unknown shape %s (nodule-z, nodule-y or nodule-x)" % shape)
             yield shape, crop(padded.cut(np.moveaxis(volume, "zyx".index(axis), 0)))
 
-    padded.score_table(lsm, stacks(), [int(v) for v in opts["--strides"].split(",")],
-                       opts["--methods"].split(","), extra)
+    padded.score_table(lsm, stacks(), opts, extra)
 
 
 if __name__ == "__main__":

@@ -166,13 +166,19 @@ def score_stack(lsm, stack, k, methods, extra, work, reference=pchip_reference):
     return scores
 
 
-def run_offset(lsm, truth, k, m, methods, extra, work):
-    """Scores of every method with m empty slices added below the truth."""
+def offset_stack(truth, k, m):
+    """The truth with m empty slices added below it and enough above it that
+    the last of every k-th slice is empty."""
     empty = np.zeros(truth[0].shape, bool)
     stack = [empty] * m + list(truth)
     while (len(stack) - 1) % k or stack[-1].any():
         stack.append(empty)
-    scores = score_stack(lsm, np.array(stack), k, methods, extra, work)
+    return np.array(stack)
+
+
+def run_offset(lsm, truth, k, m, methods, extra, work):
+    """Scores of every method with m empty slices added below the truth."""
+    scores = score_stack(lsm, offset_stack(truth, k, m), k, methods, extra, work)
     return {m_: [j["dice_volume"], j["dice"], j["hd95"], j["hd95_pooled"], j["one_sided_empty"]]
             for m_, j in scores.items()}
 

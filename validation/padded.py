@@ -7,7 +7,7 @@ end_offsets.py, which moves the ends through every offset inside a gap.
 
     /usr/bin/python3 validation/padded.py [BUILD_DIR] [--strides 8,16]
         [--shapes bunny,ball,...] [--methods ls,blend,pchip-mirror,pchip-zero,pchip-R]
-        [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
 
 Shapes and the pchip-mirror / pchip-zero / pchip-drop references as in
 end_offsets.py; pchip-R gives an empty kept slice the constant R, the largest
@@ -19,6 +19,13 @@ exactly issue 8's pairwise-linear figures on the bunny (held-out Dice 0.9578 /
 a held-out slice empty on one side only counts the image size for each of its
 boundary pixels), mean per-slice Dice, mean HD95 over the slices non-empty on
 both sides, and the count of slices empty on one side; then the means.
+
+--offsets all (here and in atlas.py, organs.py, meshes.py, ct.py, which
+share score_table) scores each stack k times instead, with m = 0 .. k-1 more
+empty slices below it and enough above it that the last kept slice is empty,
+as end_offsets.py does, and prints the scores averaged over the offsets: each
+end then falls at every offset inside its gap, as in a scan whose slice
+positions know nothing of the object.
 """
 import sys
 import tempfile
@@ -36,6 +43,8 @@ def reference(stack, k, rule):
     zs = list(range(0, len(stack), k))
     sdfs = [eo.plain_sdf(stack[z]) if stack[z].any() else None for z in zs]
     full = [j for j, d in enumerate(sdfs) if d is not None]
+    if not full:  # no kept slice crosses the object: nothing to interpolate
+        return np.zeros_like(stack, dtype=bool)
     values = []
     for j, d in enumerate(sdfs):
         if d is None:
@@ -55,9 +64,23 @@ def cut(truth):
     return np.array([empty] + list(truth[nz[0]:nz[-1] + 1]) + [empty])
 
 
-def score_table(lsm, stacks, strides, methods, extra):
+# Options every script built on score_table takes (merge into parse_args' dict).
+OPTIONS = {"--offsets": "first"}
+
+
+def score_table(lsm, stacks, opts, extra):
     """Scores every (name, stack) of `stacks` (an iterable, read lazily) at
-    every stride with every method: a Markdown row each, then the means."""
+    every stride of opts["--strides"] with every method of opts["--methods"]:
+    a Markdown row each, then the means.  opts["--offsets"]: "first" scores
+    the stack as given (every k-th slice from the first); "all" adds m = 0 ..
+    k-1 empty slices below it and enough above that the last kept slice is
+    empty (end_offsets.offset_stack), so each end falls at every offset inside
+    a gap, and prints the scores averaged over the offsets."""
+    strides = [int(v) for v in opts["--strides"].split(",")]
+    methods = opts["--methods"].split(",")
+    if opts.get("--offsets", "first") not in ("first", "all"):
+        raise SystemExit("--offsets must be first or all")
+    every_offset = opts.get("--offsets") == "all"
     print("| shape | kept | method | pooled Dice | pooled HD95 (px) | mean Dice | mean HD95 (px) "
           "| one side empty |")
     print("|---|---|---|---|---|---|---|---|")
@@ -65,17 +88,23 @@ def score_table(lsm, stacks, strides, methods, extra):
     with tempfile.TemporaryDirectory(prefix="lsm-score.") as work:
         for shape, stack in stacks:
             for k in strides:
-                if len(stack) <= k:  # one kept slice: nothing to reconstruct
+                if len(stack) <= k and not every_offset:  # one kept slice: nothing to reconstruct
                     print("| %s | every %d | (skipped: %d slices, one kept) | | | | | |"
                           % (shape, k, len(stack)))
                     continue
-                scores = eo.score_stack(lsm, stack, k, methods, extra, work, reference)
+                variants = [eo.offset_stack(stack, k, m) for m in range(k)] if every_offset \
+                    else [stack]
+                rows = {m: [] for m in methods}
+                for variant in variants:
+                    scores = eo.score_stack(lsm, variant, k, methods, extra, work, reference)
+                    for m in methods:
+                        j = scores[m]
+                        rows[m].append([j["dice_volume"], j["hd95_pooled"], j["dice"], j["hd95"],
+                                        j["one_sided_empty"]])
                 for m in methods:
-                    j = scores[m]
-                    row = (j["dice_volume"], j["hd95_pooled"], j["dice"], j["hd95"],
-                           j["one_sided_empty"])
+                    row = tuple(np.nanmean(np.array(rows[m], float), axis=0))
                     totals.setdefault((k, m), []).append(row)
-                    print("| %s | every %d | %s | %.4f | %.2f | %.3f | %.2f | %d |"
+                    print("| %s | every %d | %s | %.4f | %.2f | %.3f | %.2f | %.1f |"
                           % ((shape, k, m) + row), flush=True)
     for (k, m), rows in sorted(totals.items()):
         a = np.array(rows, float).mean(axis=0)
@@ -83,9 +112,9 @@ def score_table(lsm, stacks, strides, methods, extra):
 
 
 def main():
-    lsm, opts, extra = eo.parse_args(sys.argv[1:], {
+    lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(OPTIONS, **{
         "--strides": "8,16", "--methods": "ls,blend,pchip-mirror,pchip-zero,pchip-R",
-        "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork,blob,lens,disc"},
+        "--shapes": "bunny,ball,ellipsoid,tilted,cylinder,cone,smallball,torus,taper,fork,blob,lens,disc"}),
         "padded")
 
     def stacks():
@@ -94,8 +123,7 @@ def main():
             if truth is not None:
                 yield shape, cut(truth)
 
-    score_table(lsm, stacks(), [int(v) for v in opts["--strides"].split(",")],
-                opts["--methods"].split(","), extra)
+    score_table(lsm, stacks(), opts, extra)
 
 
 if __name__ == "__main__":
