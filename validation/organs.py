@@ -13,7 +13,8 @@ cubics of padded.py.  Deterministic (seeded); no download.
 
     /usr/bin/python3 validation/organs.py [BUILD_DIR] [--strides 4,8,16]
         [--shapes organ0,organ1,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
-        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [--margin M]
+        [-- EXTRA LSMORPH OPTIONS]
 
 Prints the same columns as padded.py; about three minutes on 2 cores.
 """

@@ -7,7 +7,8 @@ end_offsets.py, which moves the ends through every offset inside a gap.
 
     /usr/bin/python3 validation/padded.py [BUILD_DIR] [--strides 8,16]
         [--shapes bunny,ball,...] [--methods ls,blend,pchip-mirror,pchip-zero,pchip-R]
-        [--offsets first|all] [-- EXTRA LSMORPH OPTIONS]
+        [--offsets first|all] [--margin M]
+        [-- EXTRA LSMORPH OPTIONS]
 
 Shapes and the pchip-mirror / pchip-zero / pchip-drop references as in
 end_offsets.py; pchip-R gives an empty kept slice the constant R, the largest
@@ -25,7 +26,9 @@ share score_table) scores each stack k times instead, with m = 0 .. k-1 more
 empty slices below it and enough above it that the last kept slice is empty,
 as end_offsets.py does, and prints the scores averaged over the offsets: each
 end then falls at every offset inside its gap, as in a scan whose slice
-positions know nothing of the object.
+positions know nothing of the object.  --margin M adds M k more empty slices
+at either end, M more empty kept slices beyond each end (lsmorph's --ends
+auto then ends the object at mid-gap).
 """
 import sys
 import tempfile
@@ -65,7 +68,7 @@ def cut(truth):
 
 
 # Options every script built on score_table takes (merge into parse_args' dict).
-OPTIONS = {"--offsets": "first"}
+OPTIONS = {"--offsets": "first", "--margin": "0"}
 
 
 def score_table(lsm, stacks, opts, extra):
@@ -75,12 +78,18 @@ def score_table(lsm, stacks, opts, extra):
     the stack as given (every k-th slice from the first); "all" adds m = 0 ..
     k-1 empty slices below it and enough above that the last kept slice is
     empty (end_offsets.offset_stack), so each end falls at every offset inside
-    a gap, and prints the scores averaged over the offsets."""
+    a gap, and prints the scores averaged over the offsets; opts["--margin"]
+    M (with "all") adds M k more empty slices at either end, so that M more
+    empty slices are kept beyond each end, as in a scan that covers more than
+    the object."""
     strides = [int(v) for v in opts["--strides"].split(",")]
     methods = opts["--methods"].split(",")
     if opts.get("--offsets", "first") not in ("first", "all"):
         raise SystemExit("--offsets must be first or all")
     every_offset = opts.get("--offsets") == "all"
+    margin = int(opts.get("--margin", "0"))
+    if margin < 0 or (margin and not every_offset):
+        raise SystemExit("--margin needs --offsets all and a count >= 0")
     print("| shape | kept | method | pooled Dice | pooled HD95 (px) | mean Dice | mean HD95 (px) "
           "| one side empty |")
     print("|---|---|---|---|---|---|---|---|")
@@ -94,6 +103,9 @@ def score_table(lsm, stacks, opts, extra):
                     continue
                 variants = [eo.offset_stack(stack, k, m) for m in range(k)] if every_offset \
                     else [stack]
+                if margin:
+                    pad = np.zeros((margin * k,) + stack.shape[1:], bool)
+                    variants = [np.concatenate([pad, v, pad]) for v in variants]
                 rows = {m: [] for m in methods}
                 for variant in variants:
                     scores = eo.score_stack(lsm, variant, k, methods, extra, work, reference)
