@@ -31,10 +31,10 @@ static const char reconstruct_help[] =
     "each, evolves each slice into the next with phi_t + (phi - phi_target)|grad phi| = 0,\n"
     "and writes the stacked slices to OUT_DIR.  An empty slice (no foreground) ends\n"
     "the object: each part of the last section beside it closes inside that gap the\n"
-    "way the slices before it were narrowing, keeping at least a small tip up to the\n"
-    "empty slice (with --interp linear it ends at mid-gap; README, method item 7).\n"
-    "Nothing is extrapolated past the first and last slices: keep one empty slice\n"
-    "beyond each end for the object to close there.\n"
+    "way the slices before it were narrowing, up to mid-gap; past it a small tip\n"
+    "reaches the empty slice when that slice is the first or last one given (see\n"
+    "--ends; README, method item 7).  Nothing is extrapolated past the first and last\n"
+    "slices: keep one empty slice beyond each end for the object to close there.\n"
     "\n"
     "Input:\n"
     "  --input mask|outline   mask: filled regions (default); outline: thin closed\n"
@@ -98,6 +98,15 @@ static const char reconstruct_help_method[] =
     "                         each gap's morph the departure of a monotone cubic (PCHIP)\n"
     "                         through the four nearest slices from the straight line,\n"
     "                         so surfaces are C1 across input slices, without overshoot\n"
+    "  --ends auto|tip|halfway  where an object meets an empty slice (cubic profile):\n"
+    "                         tip keeps a shrinking tip past mid-gap up to the empty slice,\n"
+    "                         right when the object reaches close to it (a stack cut one\n"
+    "                         slice beyond the object); halfway draws nothing past mid-gap,\n"
+    "                         right when the true end may lie anywhere in the gap (slices\n"
+    "                         placed independently of the object); auto (default): tip\n"
+    "                         where the empty slice is the first or last slice given,\n"
+    "                         halfway where more slices lie beyond it (--interp linear\n"
+    "                         always ends at mid-gap)\n"
     "  --align auto|hull|none hull: move each slice's convex-hull centroid to the image\n"
     "                         centre before morphing and move intermediate slices back\n"
     "                         along the line (or monotone cubic) through the centroids;\n"
@@ -352,6 +361,10 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       NEEDS_VALUE();
       if ((so->interp = lsm_interp_from_name(v)) == LSM_INTERP_UNKNOWN)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--interp: '%s' is not one of linear, cubic", v);
+    } else if (IS("--ends")) {
+      NEEDS_VALUE();
+      if ((so->ends = lsm_end_rule_from_name(v)) == LSM_ENDS_UNKNOWN)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--ends: '%s' is not one of auto, tip, halfway", v);
     } else if (IS("--align")) {
       NEEDS_VALUE();
       if ((so->align = lsm_align_from_name(v)) == LSM_ALIGN_UNKNOWN)

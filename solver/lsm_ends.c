@@ -226,6 +226,10 @@ static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e
     }
 }
 
+int lsm_end_profile_is_trend(lsm_end_profile profile) {
+  return profile == LSM_END_TREND || profile == LSM_END_TREND_HALFWAY;
+}
+
 double lsm_end_depth(const lsm_grid *phi) {
   return fmax(-(double)lsm_grid_min(phi), 0.5 * phi->dx);
 }
@@ -277,7 +281,7 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
   e->R = lsm_end_depth(full);
   e->H = H;
   e->trend_reach = H;
-  if (profile != LSM_END_TREND) {
+  if (!lsm_end_profile_is_trend(profile)) {
     *out = e;
     return LSM_OK;
   }
@@ -315,7 +319,7 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
 
 void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
   const lsm_grid *full = e->full;
-  if (e->profile != LSM_END_TREND) {
+  if (!lsm_end_profile_is_trend(e->profile)) {
     const float depth = (float)lsm_end_cap_depth(e->profile, e->R, sigma);
     for (int j = 0; j < work->ny; ++j)
       for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + depth;
@@ -325,7 +329,10 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
   for (int j = 0; j < work->ny; ++j)
     for (int i = 0; i < work->nx; ++i)
       LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(e->slope, i, j);
-  const double tip = fmin(1.0, 2.0 * (1.0 - sigma)); /* 1 up to mid-gap, 0 at the empty slice */
+  /* 1 up to mid-gap, then falling to 0 at the empty slice, or 0 at once
+   * without the tip */
+  const double tip = e->profile == LSM_END_TREND_HALFWAY ? (sigma > 0.5 + 1e-9 ? 0.0 : 1.0)
+                                                         : fmin(1.0, 2.0 * (1.0 - sigma));
   for (int c = 0; c < e->parts.count; ++c) {
     const end_part *pc = &e->parts.part[c];
     const double narrowing = fmax(pc->weight * pc->area_f + sigma * e->H * pc->rate, 0.0);

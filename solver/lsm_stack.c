@@ -20,6 +20,7 @@ static const char *const method_names[LSM_METHOD_COUNT] = {"ls", "blend", "pls"}
 static const char *const input_names[LSM_INPUT_COUNT] = {"mask", "outline"};
 static const char *const align_names[LSM_ALIGN_COUNT] = {"hull", "none", "auto"};
 static const char *const interp_names[LSM_INTERP_COUNT] = {"linear", "cubic"};
+static const char *const end_rule_names[LSM_ENDS_COUNT] = {"tip", "halfway", "auto"};
 
 static int name_index(const char *const *names, int count, const char *name) {
   for (int k = 0; k < count; ++k)
@@ -52,6 +53,12 @@ const char *lsm_interp_name(lsm_interp i) {
 lsm_interp lsm_interp_from_name(const char *name) {
   return (lsm_interp)name_index(interp_names, LSM_INTERP_COUNT, name);
 }
+const char *lsm_end_rule_name(lsm_end_rule e) {
+  return e > LSM_ENDS_UNKNOWN && e < LSM_ENDS_COUNT ? end_rule_names[e] : "unknown";
+}
+lsm_end_rule lsm_end_rule_from_name(const char *name) {
+  return (lsm_end_rule)name_index(end_rule_names, LSM_ENDS_COUNT, name);
+}
 
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
   memset(opts, 0, sizeof *opts);
@@ -59,6 +66,7 @@ void lsm_stack_opts_default(lsm_stack_opts *opts) {
   opts->input = LSM_INPUT_MASK;
   opts->align = LSM_ALIGN_AUTO;
   opts->interp = LSM_INTERP_CUBIC;
+  opts->ends = LSM_ENDS_AUTO;
   opts->pixel_size = 1.0;
   opts->dz = 0.0;
   opts->per_iteration = 0;
@@ -185,6 +193,7 @@ typedef struct window {
   const slice *farther; /* M, the slice beyond the next one past a gap where the object
                          * ends (cubic; NULL elsewhere or at the stack's end) */
   double z_farther;
+  int at_start, at_end; /* A is the first input slice, B the last (whether or not loaded) */
 } window;
 
 /* A neighbour takes part in the spline only if it exists and is not empty. */
@@ -390,7 +399,7 @@ static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
 static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double z, lsm_err *err) {
   LSM_TRY(slice_phi(s, r->opts->input, 0, 0, r->image_phi, err));
   frame f;
-  window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}, NULL, 0.0};
+  window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}, NULL, 0.0, 0, 0};
   LSM_TRY(frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height,
                       r->opts->pixel_size, err));
   f.pad = 0;
@@ -787,14 +796,19 @@ static lsm_status run_gap_cap(stack_run *r, const window *w, gap *g, int a_empty
   const lsm_stack_opts *o = r->opts;
   const lsm_grid *full = a_empty ? g->phi_b : g->phi_a;
   const int kn = a_empty ? 3 : 0, kf = a_empty ? 2 : 1; /* beyond, and the full slice */
-  const lsm_end_profile profile = o->interp == LSM_INTERP_CUBIC ? LSM_END_TREND
-                                  : o->method == LSM_METHOD_BLEND ? LSM_END_BLEND
-                                                                  : LSM_END_PARABOLOID;
+  /* --ends auto: the tip where the empty slice is the stack's first or last
+   * (no input slice beyond it), nothing past mid-gap where there is one */
+  const int outermost = a_empty ? w->at_start : w->at_end;
+  const int halfway = o->ends == LSM_ENDS_HALFWAY || (o->ends == LSM_ENDS_AUTO && !outermost);
+  const lsm_end_profile profile =
+      o->interp == LSM_INTERP_CUBIC ? (halfway ? LSM_END_TREND_HALFWAY : LSM_END_TREND)
+      : o->method == LSM_METHOD_BLEND ? LSM_END_BLEND
+                                      : LSM_END_PARABOLOID;
   lsm_grid *work = NULL, *beyond = NULL;
   lsm_end *end = NULL;
   LSM_TRY(lsm_grid_clone(full, &work, err));
   lsm_status st = LSM_OK;
-  if (profile == LSM_END_TREND && window_usable(w, kn)) {
+  if (lsm_end_profile_is_trend(profile) && window_usable(w, kn)) {
     st = lsm_grid_clone(full, &beyond, err);
     if (st == LSM_OK)
       st = slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn], beyond,
@@ -1227,7 +1241,8 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
   if (st == LSM_OK) {
     window w = {{s[0].loaded ? &s[0] : NULL, &s[1], &s[2], s[3].loaded ? &s[3] : NULL},
                 {i > 0 ? src->z[i - 1] : 0.0, za, zb, i + 2 < src->count ? src->z[i + 2] : 0.0},
-                farther.loaded ? &farther : NULL, farther.loaded ? src->z[m_idx] : 0.0};
+                farther.loaded ? &farther : NULL, farther.loaded ? src->z[m_idx] : 0.0,
+                i == 0, i + 2 == src->count};
     st = run_gap_regular(r, &w, zs, fs, n, ps, err);
   }
   free(zs);
@@ -1271,7 +1286,8 @@ static lsm_status run_per_iteration(stack_run *r, lsm_pair_stats *stats, lsm_err
     ps->target = i + 1;
     st = slice_load(src, i + 1, r->width, r->height, r->opts->input, &b, err);
     if (st != LSM_OK) break;
-    window w = {{NULL, &a, &b, NULL}, {0.0, src->z[i], src->z[i + 1], 0.0}, NULL, 0.0};
+    window w = {{NULL, &a, &b, NULL}, {0.0, src->z[i], src->z[i + 1], 0.0}, NULL, 0.0,
+                i == 0, i + 2 == src->count};
     st = run_gap_iterations(r, &w, ps, err);
     if (st == LSM_OK) st = emit_input(r, &b, i + 1, src->z[i + 1], err);
     slice_free(&a);
@@ -1312,7 +1328,8 @@ static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, d
     memset(&res->stats, 0, sizeof res->stats);
     res->stats.source = i;
     res->stats.target = i + 1;
-    window w = {{NULL, &a, &b, NULL}, {0.0, base->src->z[i], base->src->z[i + 1], 0.0}, NULL, 0.0};
+    window w = {{NULL, &a, &b, NULL}, {0.0, base->src->z[i], base->src->z[i + 1], 0.0}, NULL, 0.0,
+                i == 0, i + 2 == base->src->count};
     if (st == LSM_OK) st = run_gap_iterations(&task, &w, &res->stats, &e);
     if (st == LSM_OK) st = emit_input(&task, &b, i + 1, base->src->z[i + 1], &e);
     slice_free(&a);

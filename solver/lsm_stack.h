@@ -93,11 +93,27 @@ typedef enum lsm_interp {
 const char *lsm_interp_name(lsm_interp i);
 lsm_interp lsm_interp_from_name(const char *name);
 
+/* How the cubic profile ends an object at an empty slice (README, method
+ * item 7); the linear profile always ends it at mid-gap. */
+typedef enum lsm_end_rule {
+  LSM_ENDS_UNKNOWN = -1,
+  LSM_ENDS_TIP,     /* whole or narrowing up to mid-gap, then a tip closing at the empty slice */
+  LSM_ENDS_HALFWAY, /* the same up to mid-gap, nothing past it */
+  LSM_ENDS_AUTO,    /* tip where the empty slice is the first or last input slice (a stack
+                     * cut one slice beyond the object), halfway where more slices lie beyond
+                     * it (a scan that covers more than the object) */
+  LSM_ENDS_COUNT
+} lsm_end_rule;
+
+const char *lsm_end_rule_name(lsm_end_rule e);
+lsm_end_rule lsm_end_rule_from_name(const char *name);
+
 typedef struct lsm_stack_opts {
   lsm_method method;
   lsm_input_kind input;
   lsm_align align;
   lsm_interp interp;   /* z-profile (default cubic) */
+  lsm_end_rule ends;   /* how the cubic profile ends an object (default auto) */
   double pixel_size;   /* physical size of a pixel (default 1) */
   double dz;           /* output slice spacing; <= 0 means pixel_size */
   int per_iteration;   /* the document's output mode */

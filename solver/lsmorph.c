@@ -318,6 +318,8 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   json_string(f, lsm_align_name(o->align));
   fputs(", \"interp\": ", f);
   json_string(f, lsm_interp_name(o->interp));
+  fputs(", \"ends\": ", f);
+  json_string(f, lsm_end_rule_name(o->ends));
   fprintf(f, ", \"cfl\": %.10g, \"reinit_every\": %d, \"reinit_iters\": %d, \"tol\": %.10g, "
              "\"max_iter\": %d, \"per_iteration\": %s, \"pixel_size\": %.10g, \"dz\": %.10g, "
              "\"invert\": %s, \"threads\": %d},\n",

@@ -50,6 +50,10 @@ check "unknown option is named in the message" grep -q -e "--no-such-option" "$T
 "$LSM" reconstruct "$TMP" -o "$TMP/x" --method nope >"$TMP/o" 2>"$TMP/e"
 rc=$?
 check "bad --method value exits 2 (got $rc)" [ $rc -eq 2 ]
+"$LSM" reconstruct "$TMP" -o "$TMP/x" --ends middle >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "bad --ends value exits 2 (got $rc)" [ $rc -eq 2 ]
+check "bad --ends value lists auto, tip, halfway" grep -q "not one of auto, tip, halfway" "$TMP/e"
 "$LSM" reconstruct "$TMP" -o "$TMP/x" --cfl -1 >"$TMP/o" 2>"$TMP/e"
 rc=$?
 check "negative --cfl exits 2 (got $rc)" [ $rc -eq 2 ]
@@ -114,6 +118,7 @@ if [ -f "$J" ]; then
   check "run.json has the pair 006.png -> 007.png" \
     grep -q '"source": "006.png", "target": "007.png"' "$J"
   check "run.json: no pair hit max_iter" sh -c "! grep -q '\"hit_max_iter\": true' '$J'"
+  check "run.json options say \"ends\": \"auto\" (the default)" grep -q '"ends": "auto"' "$J"
   if command -v python3 >/dev/null 2>&1; then
     check "run.json is valid JSON: 6 pairs, positive iterations, dt, cells, none aligned (nested, centred rectangles); 25 slices" python3 -c '
 import json, sys
@@ -128,6 +133,14 @@ assert d["output"]["slices"] == 25, d["output"]
   fi
 fi
 check "no temporary folder left next to OUT" sh -c "! ls -d '$OUT'.tmp-* >/dev/null 2>&1"
+
+# --ends changes only gaps next to an empty slice: the pyramid has none.
+"$LSM" reconstruct "$SET" -o "$TMP/out-halfway" --input outline --heights "$SET/heights.txt" \
+  --dz 10 --ends halfway -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--ends halfway exits 0 (got $rc)" [ $rc -eq 0 ]
+check "run.json options say \"ends\": \"halfway\"" grep -q '"ends": "halfway"' "$TMP/out-halfway/run.json"
+check "--ends halfway: the same volume without empty slices" cmp -s "$OUT/volume.nrrd" "$TMP/out-halfway/volume.nrrd"
 
 # The same command into an existing OUT replaces it.
 "$LSM" reconstruct "$SET" -o "$OUT" --input outline --heights "$SET/heights.txt" --dz 40 -q \

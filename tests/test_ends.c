@@ -268,6 +268,30 @@ static void test_tip_floor(void **state) {
   lsm_grid_destroy(&phi_n);
 }
 
+/* --ends halfway: the same end as the tip rule up to mid-gap (a lone flat
+ * section, and a rounded end whose cells the floor keeps), nothing past it,
+ * where the tip rule still holds cells up to the empty slice. */
+static void test_halfway_end(void **state) {
+  (void)state;
+  const disc f = {47.5, 47.5, 10.0}, n = {47.5, 47.5, 22.0};
+  lsm_grid *phi_f = discs_phi(&f, 1), *phi_n = discs_phi(&n, 1);
+  for (int with_n = 0; with_n < 2; ++with_n) {
+    const lsm_grid *beyond = with_n ? phi_n : NULL;
+    const double h = with_n ? 8.0 : 0.0;
+    for (double sigma = 0.125; sigma <= 0.5; sigma += 0.125)
+      assert_true(end_area(phi_f, beyond, h, 8.0, LSM_END_TREND_HALFWAY, sigma) ==
+                  end_area(phi_f, beyond, h, 8.0, LSM_END_TREND, sigma));
+    for (double sigma = 0.625; sigma < 0.95; sigma += 0.125) {
+      assert_true(end_area(phi_f, beyond, h, 8.0, LSM_END_TREND_HALFWAY, sigma) == 0.0);
+      assert_true(end_area(phi_f, beyond, h, 8.0, LSM_END_TREND, sigma) >= 1.0);
+    }
+  }
+  assert_true(lsm_end_profile_is_trend(LSM_END_TREND_HALFWAY));
+  assert_false(lsm_end_profile_is_trend(LSM_END_PARABOLOID));
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
 /* Each part ends on its own: of two discs of F, the one inside N's wide disc
  * narrows with it; the one outside N grows out toward the end (a tail) and
  * is a flat end, whole up to mid-gap. */
@@ -361,6 +385,7 @@ int main(void) {
       cmocka_unit_test(test_rounded_end),
       cmocka_unit_test(test_two_section_end),
       cmocka_unit_test(test_tip_floor),
+      cmocka_unit_test(test_halfway_end),
       cmocka_unit_test(test_flat_end_with_m),
       cmocka_unit_test(test_parts_end_apart),
       cmocka_unit_test(test_trend_reach),

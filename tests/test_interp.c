@@ -563,6 +563,49 @@ static void test_object_ends(void **state) {
   record_free(&rec);
 }
 
+/* --ends: the flat end of test_object_ends (a cylinder crossed by three
+ * sections, an empty slice at z = 0).  halfway: the same as tip from F down
+ * to mid-gap, whole, and nothing past it, where tip keeps its tip.  auto (the
+ * default): tip where the empty slice is the first input slice, as here;
+ * halfway when another empty slice lies below it (z = -8: a scan that
+ * covers more than the object). */
+static void test_object_ends_halfway(void **state) {
+  (void)state;
+  const double z[5] = {-8.0, 0.0, 8.0, 16.0, 24.0};
+  const double r_flat[5] = {0.0, 0.0, 20.0, 20.0, 20.0};
+  disc_source cut = {96, r_flat + 1, NULL}, scan = {96, r_flat, NULL};
+  record tip = {0}, halfway = {0}, auto_cut = {0}, auto_scan = {0};
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  assert_int_equal(o.ends, LSM_ENDS_AUTO);
+  o.dz = 1.0;
+  run_stack(&cut, z + 1, 4, &o, &auto_cut);
+  run_stack(&scan, z, 5, &o, &auto_scan);
+  o.ends = LSM_ENDS_TIP;
+  run_stack(&cut, z + 1, 4, &o, &tip);
+  o.ends = LSM_ENDS_HALFWAY;
+  run_stack(&cut, z + 1, 4, &o, &halfway);
+  const size_t area_f = slice_inside(&halfway, slice_at(&halfway, 8.0), NULL);
+  for (double zz = 1.0; zz <= 8.0; zz += 1.0) {
+    const size_t a = slice_inside(&halfway, slice_at(&halfway, zz), NULL);
+    const size_t a_tip = slice_inside(&tip, slice_at(&tip, zz), NULL);
+    print_message("end halfway: area at z = %.0f: %zu (tip rule %zu)\n", zz, a, a_tip);
+    if (zz < 4.0) {
+      assert_int_equal(a, 0);
+      assert_true(a_tip > 0);
+    } else {
+      assert_int_equal(a, area_f);
+      assert_int_equal(a, a_tip);
+    }
+    assert_int_equal(slice_inside(&auto_cut, slice_at(&auto_cut, zz), NULL), a_tip);
+    assert_int_equal(slice_inside(&auto_scan, slice_at(&auto_scan, zz), NULL), a);
+  }
+  record_free(&tip);
+  record_free(&halfway);
+  record_free(&auto_cut);
+  record_free(&auto_scan);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cubic_monotone),
@@ -572,6 +615,7 @@ int main(void) {
       cmocka_unit_test(test_per_iteration_empty_identical),
       cmocka_unit_test(test_component_halfway),
       cmocka_unit_test(test_object_ends),
+      cmocka_unit_test(test_object_ends_halfway),
       cmocka_unit_test(test_first_slice_slope),
       cmocka_unit_test(test_end_neighbour_flat),
   };
