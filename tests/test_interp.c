@@ -1,5 +1,5 @@
 /* Tests of the z-profile through the slices (--interp linear|cubic):
- * monotonicity, exact input slices, C1 continuity across input slices on a
+ * monotonicity (blend, ls, pls), exact input slices, C1 continuity across input slices on a
  * ball, stride-1 identity.  Slices come from an in-memory source; output
  * slices are recorded by an in-memory sink. */
 #include "tests/lsm_test.h"
@@ -74,17 +74,22 @@ static void run_stack(disc_source *src, const double *z, size_t n, lsm_stack_opt
   free(stats);
 }
 
-/* The input slice's signed distance, as the stack computes it. */
-static void input_phi(disc_source *src, size_t k, float *out) {
+/* Slice k's signed distance, as the stack computes it, from a source's load. */
+typedef lsm_status (*load_fn)(void *ctx, size_t index, lsm_mask *out, lsm_err *err);
+static void phi_of(load_fn load, void *ctx, int size, size_t k, float *out) {
   lsm_mask m;
   lsm_grid *g = NULL;
-  assert_int_equal(disc_load(src, k, &m, NULL), LSM_OK);
-  assert_int_equal(lsm_grid_create(src->size, src->size, 1.0f, 1.0f, &g, NULL), LSM_OK);
+  assert_int_equal(load(ctx, k, &m, NULL), LSM_OK);
+  assert_int_equal(lsm_grid_create(size, size, 1.0f, 1.0f, &g, NULL), LSM_OK);
   assert_int_equal(lsm_sdf_from_mask(&m, g, NULL), LSM_OK);
-  for (int y = 0; y < src->size; ++y)
-    for (int x = 0; x < src->size; ++x) out[(size_t)y * src->size + x] = LSM_AT(g, x, y);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) out[(size_t)y * size + x] = LSM_AT(g, x, y);
   lsm_grid_destroy(&g);
   lsm_mask_free(&m);
+}
+
+static void input_phi(disc_source *src, size_t k, float *out) {
+  phi_of(disc_load, src, src->size, k, out);
 }
 
 /* A ball of radius 30 centred at z = 36, cut every 6 units: radii of the cross-sections. */
@@ -95,6 +100,36 @@ static void ball(double *radius, double *z) {
     double h = z[k] - 33.0;
     radius[k] = 30.0 * 30.0 - h * h > 0 ? sqrt(30.0 * 30.0 - h * h) : 0.0;
   }
+}
+
+/* Every output cell of a gap between two non-empty slices lies within the
+ * range of its two slices' values (no overshoot); returns the cells checked.
+ * load reads slice k (phi_of). */
+static size_t check_within_neighbours(const record *rec, const double *z, size_t n, load_fn load,
+                                      void *src, const double *radius) {
+  const size_t cells = (size_t)rec->w * rec->h;
+  float *pa = malloc(cells * sizeof(float)), *pb = malloc(cells * sizeof(float));
+  assert_non_null(pa);
+  assert_non_null(pb);
+  size_t checked = 0;
+  for (size_t q = 0; q < rec->count; ++q) {
+    if (rec->input[q] >= 0) continue;
+    size_t k = 0;
+    while (k + 1 < n && z[k + 1] < rec->z[q]) ++k;
+    if (radius[k] <= 0 || radius[k + 1] <= 0) continue; /* caps are not splines */
+    phi_of(load, src, rec->w, k, pa);
+    phi_of(load, src, rec->w, k + 1, pb);
+    const float *p = rec->phi + q * cells;
+    for (size_t c = 0; c < cells; ++c) {
+      float lo = fminf(pa[c], pb[c]) - 1e-4f, hi = fmaxf(pa[c], pb[c]) + 1e-4f;
+      if (p[c] < lo || p[c] > hi)
+        fail_msg("slice z=%g cell %zu: %g outside [%g, %g]", rec->z[q], c, p[c], lo, hi);
+      checked++;
+    }
+  }
+  free(pa);
+  free(pb);
+  return checked;
 }
 
 /* Blend + cubic: every output pixel lies within the range of its two
@@ -114,27 +149,63 @@ static void test_cubic_monotone(void **state) {
   record rec = {0};
   run_stack(&src, z, BALL_SLICES, &o, &rec);
   const size_t cells = (size_t)rec.w * rec.h;
-  float *pa = malloc(cells * sizeof(float)), *pb = malloc(cells * sizeof(float));
-  size_t checked = 0;
-  for (size_t q = 0; q < rec.count; ++q) {
-    if (rec.input[q] >= 0) continue;
-    size_t k = 0;
-    while (k + 1 < BALL_SLICES && z[k + 1] < rec.z[q]) ++k;
-    if (radius[k] <= 0 || radius[k + 1] <= 0) continue; /* caps are not splines */
-    input_phi(&src, k, pa);
-    input_phi(&src, k + 1, pb);
-    const float *p = rec.phi + q * cells;
-    for (size_t c = 0; c < cells; ++c) {
-      float lo = fminf(pa[c], pb[c]) - 1e-4f, hi = fmaxf(pa[c], pb[c]) + 1e-4f;
-      if (p[c] < lo || p[c] > hi)
-        fail_msg("slice z=%g pixel %zu: %g outside [%g, %g]", rec.z[q], c, p[c], lo, hi);
-      checked++;
-    }
-  }
-  assert_true(checked > 10 * cells);
-  free(pa);
-  free(pb);
+  assert_true(check_within_neighbours(&rec, z, BALL_SLICES, disc_load, &src, radius) > 10 * cells);
   record_free(&rec);
+}
+
+/* ---- in-memory source: ellipses turning about the image centre ------------------ */
+
+#define TURN_SLICES 9
+typedef struct ellipse_source {
+  int size;
+  double a, b;  /* semi-axes (px) */
+  double turn;  /* rotation per slice (radians) */
+} ellipse_source;
+
+static lsm_status ellipse_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
+  const ellipse_source *e = ctx;
+  LSM_TRY(lsm_mask_create(e->size, e->size, out, err));
+  const double c = 0.5 * (e->size - 1), th = e->turn * (double)index;
+  for (int y = 0; y < e->size; ++y)
+    for (int x = 0; x < e->size; ++x) {
+      const double u = (cos(th) * (x - c) + sin(th) * (y - c)) / e->a;
+      const double v = (-sin(th) * (x - c) + cos(th) * (y - c)) / e->b;
+      out->pixels[(size_t)y * e->size + x] = u * u + v * v <= 1.0;
+    }
+  return LSM_OK;
+}
+
+/* ls and pls + cubic: the morph's departure from the straight line, added to
+ * the cubic's, must not take a cell outside its two slices' range either.
+ * A long ellipse turning by half a radian per slice, every 6th unit: without
+ * the clamp of gap_add_cubic 72 cells leave it, by up to 0.08 px. */
+static void test_cubic_monotone_morph(void **state) {
+  (void)state;
+  ellipse_source src = {64, 20.0, 8.0, 0.5};
+  double z[TURN_SLICES], radius[TURN_SLICES];
+  for (int k = 0; k < TURN_SLICES; ++k) {
+    z[k] = 6.0 * k;
+    radius[k] = 1.0; /* every slice non-empty */
+  }
+  const lsm_method methods[] = {LSM_METHOD_LS, LSM_METHOD_PLS};
+  for (int m = 0; m < 2; ++m) {
+    lsm_stack_opts o;
+    lsm_stack_opts_default(&o);
+    o.method = methods[m];
+    o.align = LSM_ALIGN_NONE; /* the range holds in the pair's frame */
+    lsm_slice_source s = {&src, TURN_SLICES, z, ellipse_load, NULL};
+    record rec = {0};
+    lsm_slice_sink sink = {&rec, record_emit};
+    lsm_pair_stats stats[TURN_SLICES];
+    lsm_err err;
+    lsm_err_clear(&err);
+    if (lsm_stack_run(&s, src.size, src.size, &o, &sink, stats, NULL, &err) != LSM_OK)
+      fail_msg("stack failed: %s", err.msg);
+    const size_t cells = (size_t)rec.w * rec.h;
+    assert_true(check_within_neighbours(&rec, z, TURN_SLICES, ellipse_load, &src, radius) >
+                30 * cells);
+    record_free(&rec);
+  }
 }
 
 /* Input heights on the output grid get their input slice back exactly. */
@@ -609,6 +680,7 @@ static void test_object_ends_halfway(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cubic_monotone),
+      cmocka_unit_test(test_cubic_monotone_morph),
       cmocka_unit_test(test_inputs_exact),
       cmocka_unit_test(test_c1_ball),
       cmocka_unit_test(test_stride_one),
