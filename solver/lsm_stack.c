@@ -1378,7 +1378,11 @@ static lsm_status run_distributed(stack_run *r, const gap_plan *plan, double z0,
     } else {
       continue; /* another worker's gap */
     }
-    if (st == LSM_OK && res.status != LSM_OK) st = lsm_fail(err, res.status, NULL, "%s", res.msg);
+    if (st == LSM_OK && res.status != LSM_OK) {
+      st = lsm_fail(err, res.status, NULL, "%s", res.msg);
+      stats[i].source = i; /* the failing gap is the last one started */
+      stats[i].target = i + 1;
+    }
     if (st == LSM_OK) {
       stats[i] = res.stats;
       st = buffer_replay(r, &res, err);
@@ -1474,6 +1478,9 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
           ts = buffer_replay(&r, &buf, &e);
         }
         if (!failed && ts != LSM_OK) {
+          /* the failing gap is the last one started (lsmorph names it) */
+          stats[i].source = i;
+          stats[i].target = i + 1;
           first_status = ts;
           first_err = e;
 #pragma omp atomic write

@@ -75,6 +75,9 @@ expect() {
 # good: 3 discs of 32x32; b-KIND: a good slice and a broken one; k-KIND: 3 discs
 # in each colour type and bit depth; the rest as named below.
 for i in 1 2 3; do png gray8 "good/$i.png" 32 $((3 + 2 * i)); done
+for i in 1 2 3; do png gray8 "late/$i.png" 128 30; done # late: only the last two gaps move
+png gray8 late/4.png 128 5
+png gray8 late/5.png 128 40
 for kind in text zero truncated no_iend bad_crc bad_idat_crc bad_zlib; do
   png gray8 "b-$kind/1.png" 32 5
   png "$kind" "b-$kind/2.png" 32
@@ -207,6 +210,11 @@ if [ "$(fingerprint good)" = "$sum" ]; then ok; else bad "the input folder was c
 expect "CFL blow-up" 1 "good/1.png -> 2.png (gap 1 of 2): iteration" out \
   reconstruct good -o out -q --per-iteration --cfl 50
 if grep -q -F "is no longer finite" "$TMP/stderr"; then ok; else bad "CFL blow-up: $(cat "$TMP/stderr")"; fi
+# gaps side by side (the default) or one by one: the gap that failed is named, not the one before
+for threads in 1 3; do
+  expect "CFL blow-up in the last gap, --threads $threads" 1 "late/4.png -> 5.png (gap 4 of 4): iteration" out \
+    reconstruct late -o out -q --spacing 40 --cfl 1000 --threads $threads
+done
 
 # ---- every colour type and bit depth still works; all-empty slices too ---------------------------------------
 "$LSM" reconstruct good -o ref -q >/dev/null 2>"$TMP/stderr" || bad "reference run: $(cat "$TMP/stderr")"
