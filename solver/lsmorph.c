@@ -843,12 +843,23 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   free(pool);
   if (st != LSM_OK) return st;
   size_t cmp = count - incomparable;
-  printf("{\"held_out\": %zu, \"dice_volume\": %.6f, \"dice\": %.6f, \"hd95\": %.4f, "
-         "\"hd95_pooled\": %.4f, \"mean_surface\": %.4f, \"volume_error\": %.6f, "
-         "\"one_sided_empty\": %zu}\n",
-         count, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0,
-         count ? dice / (double)count : NAN, cmp ? hd95 / (double)cmp : NAN, pooled,
-         cmp ? msd / (double)cmp : NAN, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN, incomparable);
+  /* undefined scores (no held-out slice, no boundary on both sides, an empty
+   * truth) are JSON null, as in run.json */
+  printf("{\"held_out\": %zu, \"dice_volume\": ", count);
+  json_number(stdout, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0);
+  printf(", \"dice\": ");
+  json_number(stdout, count ? dice / (double)count : NAN);
+  printf(", \"hd95\": ");
+  json_number(stdout, cmp ? hd95 / (double)cmp : NAN);
+  printf(", \"hd95_pooled\": ");
+  json_number(stdout, pooled);
+  printf(", \"mean_surface\": ");
+  json_number(stdout, cmp ? msd / (double)cmp : NAN);
+  printf(", \"volume_error\": ");
+  json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
+  printf(", \"one_sided_empty\": %zu}\n", incomparable);
+  if (fflush(stdout) != 0 || ferror(stdout))
+    return lsm_fail(err, LSM_ERR_IO, NULL, "cannot write the scores to standard output");
   return LSM_OK;
 }
 

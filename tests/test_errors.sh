@@ -238,6 +238,18 @@ if [ $rc -eq 0 ] && [ "$(inside out-empty/volume.nrrd)" -eq 0 ] &&
 else
   bad "all-empty slices: exit $rc ($(cat "$TMP/stderr"))"
 fi
+# score prints strict JSON: undefined scores (no boundary anywhere, an empty truth) are null, not nan
+"$LSM" score k-empty out-empty --stride 2 >"$TMP/stdout" 2>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && "$PY" -c 'import json, sys
+def reject(c): raise ValueError(c)
+j = json.load(open(sys.argv[1]), parse_constant=reject)
+sys.exit(not (j["held_out"] == 1 and j["hd95_pooled"] is None and j["volume_error"] is None and j["dice"] == 1))' \
+  "$TMP/stdout"; then
+  ok
+else
+  bad "score of empty slices: exit $rc, not strict JSON with nulls: $(cat "$TMP/stdout" "$TMP/stderr")"
+fi
 
 # ---- write errors: a file-size limit makes write() fail with EFBIG ----------------------------------------------
 "$PY" "$TESTS/make_stack.py" med 6 128 || bad "make_stack.py med"
