@@ -48,8 +48,8 @@ static const char reconstruct_help[] =
     "                         heights and the output signed distance use this unit\n"
     "  --max-pixels N         refuse slices with more pixels (default 268435456); with\n"
     "                         --align auto|hull also a gap's working canvas, up to\n"
-    "                         (W+L) x (H+L) for W x H slices, L the longer side,\n"
-    "                         must stay within 4 N (use --align none for long strips)\n"
+    "                         (2W+4) x (2H+4) cells for W x H slices, must stay\n"
+    "                         within 4 N: (W+2) x (H+2) <= N (or use --align none)\n"
     "  --max-voxels N         refuse runs whose output volume would have more voxels\n"
     "                         (default 17179869184 = 2^34; not checked with\n"
     "                         --per-iteration, where the count is not known ahead)\n"
@@ -93,7 +93,8 @@ static const char reconstruct_help_method[] =
     "                         CP = | ||phi^n - phi_T|| - ||phi^(n-1) - phi_T|| | <= T\n"
     "                         (default 0.25; the norm is over all cells, so CP grows\n"
     "                         with the square root of the cell count: scale T with it)\n"
-    "  --max-iter N           most solver steps per pair (default 100000)\n"
+    "  --max-iter N           most solver steps per morph (default 100000); a gap runs\n"
+    "                         two, A -> B and B -> A (one with --per-iteration)\n"
     "  --interp linear|cubic  z-profile through the slices (default cubic): cubic adds to\n"
     "                         each gap's morph the departure of a monotone cubic (PCHIP)\n"
     "                         through the four nearest slices from the straight line,\n"
@@ -164,9 +165,20 @@ static const char score_help[] =
     "Scores a reconstruction made from every K-th slice of TRUTH_DIR (the 1st,\n"
     "(K+1)-th, ... in natural order, with --spacing 1) against the slices left out:\n"
     "OUT_DIR/slices/N.png is compared with the N-th truth slice for every N that was\n"
-    "not an input.  Prints one JSON object: mean Dice, mean 95 % Hausdorff distance\n"
-    "(pixels, symmetric, between boundary pixels), mean surface distance, and the\n"
-    "relative volume error over all held-out slices.\n";
+    "not an input.  Prints one JSON object (distances in pixels, symmetric, between\n"
+    "boundary pixels):\n"
+    "  held_out         slices scored\n"
+    "  dice_volume      Dice pooled over all held-out slices\n"
+    "  dice             mean Dice per slice\n"
+    "  hd95             mean 95 % Hausdorff distance over the slices non-empty on\n"
+    "                   both sides\n"
+    "  hd95_pooled      95 % Hausdorff distance over all boundary pixels pooled; a\n"
+    "                   slice empty on one side only counts the image size for each\n"
+    "                   of its boundary pixels\n"
+    "  mean_surface     mean surface distance over the slices non-empty on both sides\n"
+    "  volume_error     (result - truth) / truth volume over the held-out slices\n"
+    "  one_sided_empty  held-out slices empty on one side only\n"
+    "A score that is undefined (no boundary anywhere, an empty truth) is null.\n";
 
 void lsm_cli_help(FILE *f, const char *topic) {
   if (topic && strcmp(topic, "reconstruct") == 0) {
@@ -400,7 +412,7 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   if (!cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing SLICE_DIR");
   if (!cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing -o OUT_DIR");
   if (so->per_iteration && so->method == LSM_METHOD_BLEND)
-    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs --method ls");
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a level-set method (--method ls or pls)");
   return LSM_OK;
 }
 

@@ -183,6 +183,7 @@ typedef struct out_sink {
   FILE *heights;
   size_t count;
   double z_first, z_last;
+  double step_min, step_max; /* between consecutive output slices */
   uint8_t *mask;
 } out_sink;
 
@@ -209,6 +210,12 @@ static size_t output_files(const lsm_cli *cli, const char **names, size_t cap) {
   return n;
 }
 
+/* Whether the output heights are evenly spaced (always so but with
+ * --per-iteration, whose pairs each have their own iteration count). */
+static int sink_evenly_spaced(const out_sink *s) {
+  return s->count <= 2 || s->step_max - s->step_min <= 1e-6 * fabs(s->step_max);
+}
+
 static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, double z,
                             long input_index, lsm_err *err) {
   out_sink *s = ctx;
@@ -218,8 +225,14 @@ static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, 
   if (s->mesh && higher) LSM_TRY(lsm_mesh_add_slice(s->mesh, phi, z, err));
   if (s->preview && higher) LSM_TRY(lsm_preview_add_slice(s->preview, phi, z, input_index, err));
   if (fprintf(s->heights, "%.17g\n", z) < 0)
-    return lsm_fail(err, LSM_ERR_IO, "heights.txt", "write failed: %s", strerror(errno));
-  if (s->count == 0) s->z_first = z;
+    return lsm_fail(err, LSM_ERR_IO, NULL, "%s/heights.txt: write failed: %s", s->dir, strerror(errno));
+  if (s->count == 0) {
+    s->z_first = z;
+  } else {
+    const double step = z - s->z_last;
+    if (s->count == 1 || step < s->step_min) s->step_min = step;
+    if (s->count == 1 || step > s->step_max) s->step_max = step;
+  }
   s->z_last = z;
   s->count++;
   if (s->write_slices) {
@@ -343,6 +356,8 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   json_number(f, sink->z_first);
   fputs(", \"last_height\": ", f);
   json_number(f, sink->z_last);
+  fprintf(f, ", \"evenly_spaced\": %s",
+          sink_evenly_spaced(sink) ? "true" : "false");
   fputs(", \"files\": [", f);
   const char *files[16];
   size_t nfiles = output_files(cli, files, 16);
@@ -408,8 +423,9 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
     fputc('}', f);
   }
   fputs("]\n}\n", f);
-  int bad = ferror(f);
-  if (fclose(f) != 0 || bad) return lsm_fail(err, LSM_ERR_IO, path, "write failed");
+  const int bad = ferror(f), closed = fclose(f);
+  if (bad || closed != 0)
+    return lsm_fail(err, LSM_ERR_IO, path, "write failed: %s", closed != 0 ? strerror(errno) : "stream error");
   return LSM_OK;
 }
 
@@ -752,8 +768,9 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   lsm_preview_free(&sink.preview);
   if (sink.heights) {
     int bad = ferror(sink.heights);
-    if (fclose(sink.heights) != 0 || bad)
-      if (st == LSM_OK) st = lsm_fail(err, LSM_ERR_IO, "heights.txt", "write failed");
+    if ((fclose(sink.heights) != 0 || bad) && st == LSM_OK)
+      st = lsm_fail(err, LSM_ERR_IO, NULL, "%s/heights.txt: write failed: %s", tmp,
+                    bad ? "stream error" : strerror(errno));
     sink.heights = NULL;
   }
   if (st == LSM_OK) {
@@ -771,6 +788,12 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
       if (capped)
         fprintf(stderr, "lsmorph: note: %d gaps stopped at --max-iter %d before finishing\n",
                 capped, cli->stack.max_iter);
+      if (!sink_evenly_spaced(&sink))
+        fprintf(stderr,
+                "lsmorph: note: the output slices are not evenly spaced (steps %.4g to %.4g); "
+                "the volume files hold one z spacing, the mean (%.4g): heights.txt has each "
+                "slice's height\n",
+                sink.step_min, sink.step_max, (sink.z_last - sink.z_first) / (double)(sink.count - 1));
       const char *files[16];
       size_t nfiles = output_files(cli, files, 16);
       fprintf(stderr, "lsmorph: wrote %zu slices to %s (", sink.count, cli->out_dir);

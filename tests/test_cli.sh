@@ -128,11 +128,20 @@ assert len(p) == 6, len(p)
 for q in p:
     assert q["iterations"] > 0 and q["dt"] > 0 and q["cells"] > 0 and q["seconds"] >= 0, q
     assert q["aligned"] is False and q["moving_parts"] == 0, q
-assert d["output"]["slices"] == 25, d["output"]
+assert d["output"]["slices"] == 25 and d["output"]["evenly_spaced"] is True, d["output"]
 ' "$J"
   fi
 fi
 check "no temporary folder left next to OUT" sh -c "! ls -d '$OUT'.tmp-* >/dev/null 2>&1"
+
+# --per-iteration: each pair has its own slice count, so the heights are uneven; the volume
+# files hold one spacing, and run.json and a note say so.
+"$LSM" reconstruct "$SET" -o "$TMP/out-iter" --input outline --heights "$SET/heights.txt" \
+  --per-iteration --no-preview >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--per-iteration exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "--per-iteration: run.json says \"evenly_spaced\": false" grep -q '"evenly_spaced": false' "$TMP/out-iter/run.json"
+check "--per-iteration: a note says the slices are not evenly spaced" grep -q "note: the output slices are not evenly spaced" "$TMP/e"
 
 # --ends changes only gaps next to an empty slice: the pyramid has none.
 "$LSM" reconstruct "$SET" -o "$TMP/out-halfway" --input outline --heights "$SET/heights.txt" \
