@@ -26,7 +26,8 @@ typedef struct end_part {
   int has_m;      /* some component of M reaches it */
   double nested;  /* its cells inside N */
   double weight;  /* share of it that narrows like N -> F; the rest is a flat end */
-  double rate;    /* dA/dz of that share toward the end, <= 0 (cells per unit z) */
+  double rate;    /* dA/dz of the line through A_N and A_F toward the end, <= 0
+                  * (cells per unit z); the narrowing share follows weight x it */
   double power;   /* exponent p of its tip past mid-gap */
 } end_part;
 
@@ -335,7 +336,8 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
                                                          : fmin(1.0, 2.0 * (1.0 - sigma));
   for (int c = 0; c < e->parts.count; ++c) {
     const end_part *pc = &e->parts.part[c];
-    const double narrowing = fmax(pc->weight * pc->area_f + sigma * e->H * pc->rate, 0.0);
+    /* the narrowing share: weight x the line through A_N and A_F */
+    const double narrowing = fmax(pc->weight * (pc->area_f + sigma * e->H * pc->rate), 0.0);
     const double tip_area = pc->area_f * pow(tip, pc->power);
     e->target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, tip_area);
     if (e->has_beyond) {

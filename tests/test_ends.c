@@ -221,6 +221,36 @@ static void test_two_section_end(void **state) {
   lsm_grid_destroy(&phi_n);
 }
 
+/* A part half inside N (a share between 40 % and 60 %: weight w of it narrows
+ * like N -> F, the rest is a flat end): up to mid-gap its area follows
+ * (1 - w) A_F + w min(line, parabola), the line through A_N and A_F and the
+ * parabola through them and zero at the empty slice taken for the narrowing
+ * share alone, w A_F + w sigma H (A_F - A_N) / h for the line. */
+static void test_half_nested_end(void **state) {
+  (void)state;
+  const disc f = {35.0, 47.5, 16.0}, n = {57.5, 47.5, 24.0};
+  lsm_grid *phi_f = discs_phi(&f, 1), *phi_n = discs_phi(&n, 1);
+  const double a_f = area(phi_f), a_n = area(phi_n), h = 8.0, H = 8.0;
+  double nested = 0.0;
+  for (int j = 0; j < SIZE; ++j)
+    for (int i = 0; i < SIZE; ++i) nested += LSM_AT(phi_f, i, j) <= 0.0f && LSM_AT(phi_n, i, j) <= 0.0f;
+  const double w = (nested / a_f - 0.4) / 0.2;
+  print_message("share inside N %.3f, weight %.3f\n", nested / a_f, w);
+  assert_true(w > 0.25 && w < 0.75);
+  for (double sigma = 0.125; sigma <= 0.5; sigma += 0.125) {
+    const double a = end_area(phi_f, phi_n, h, H, LSM_END_TREND, sigma);
+    const double line = a_f - sigma * H * (a_n - a_f) / h;
+    const double parabola = fmax(two_section_parabola(a_n, a_f, h, H, sigma * H), 0.0);
+    const double cap = (1.0 - w) * a_f + w * fmin(line, parabola);
+    print_message("sigma %.3f: %.0f cells, cap %.0f (line %.0f, parabola %.0f)\n", sigma, a, cap,
+                  line, parabola);
+    assert_true(a <= cap + 1e-9);
+    assert_true(a >= cap - 0.05 * a_f);
+  }
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
 /* M does not change an end that keeps its size (a cylinder: M, N and F the
  * same disc) or one that widens toward it ever faster (a cone's base): the
  * parabola then lies above F's area, and the flat end stays whole up to
@@ -384,6 +414,7 @@ int main(void) {
       cmocka_unit_test(test_narrowing_end),
       cmocka_unit_test(test_rounded_end),
       cmocka_unit_test(test_two_section_end),
+      cmocka_unit_test(test_half_nested_end),
       cmocka_unit_test(test_tip_floor),
       cmocka_unit_test(test_halfway_end),
       cmocka_unit_test(test_flat_end_with_m),
