@@ -157,7 +157,8 @@ static const char reconstruct_help_files[] =
     "interrupted by SIGINT / SIGTERM / SIGHUP (the process ends by that signal).\n"
     "Results are written to a temporary folder OUT_DIR.tmp-XXXXXX next to OUT_DIR and\n"
     "moved into place only when complete; on any failure or interruption it is\n"
-    "removed and an earlier OUT_DIR is left as it was.\n";
+    "removed and an earlier OUT_DIR is left as it was.  An existing OUT_DIR is replaced\n"
+    "only when it is empty or an earlier result (it has a run.json).\n";
 
 static const char score_help[] =
     "Usage: lsmorph score TRUTH_DIR OUT_DIR --stride K\n"

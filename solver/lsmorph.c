@@ -2,6 +2,7 @@
  * PNG slices (io/) into the stack driver (lsm_stack) and its output slices into
  * the writers, writes run.json, and publishes OUT_DIR atomically. */
 #define _XOPEN_SOURCE 700
+#include <dirent.h>
 #include <errno.h>
 #include <ftw.h>
 #if defined(__GLIBC__) || defined(__linux__)
@@ -507,27 +508,62 @@ static lsm_status publish(const char *tmp, const char *out_dir, lsm_err *err) {
  * the voxels of the output volume (--max-voxels).  All sizes are computed in
  * 64-bit or double arithmetic, so nothing can wrap around.  On success
  * *width x *height is the slice size. */
+/* Whether the path `inner` (resolved) is `outer_real` or lies inside it. */
+static int path_within(const char *inner, const char *outer_real) {
+  char *inner_real = realpath(inner, NULL);
+  if (!inner_real || !outer_real) {
+    free(inner_real);
+    return 0;
+  }
+  const size_t n = strlen(outer_real);
+  const int within = strncmp(inner_real, outer_real, n) == 0 &&
+                     (inner_real[n] == '/' || inner_real[n] == '\0' || (n == 1 && outer_real[0] == '/'));
+  free(inner_real);
+  return within;
+}
+
+/* Whether the folder `dir` holds anything but run.json says it is not an
+ * earlier result: 1 for a non-empty folder without run.json. */
+static int foreign_folder(const char *dir) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/run.json", dir);
+  struct stat sb;
+  if (stat(path, &sb) == 0 && S_ISREG(sb.st_mode)) return 0;
+  DIR *d = opendir(dir);
+  if (!d) return 0; /* unreadable: publishing will say what is wrong */
+  int foreign = 0;
+  for (struct dirent *e; !foreign && (e = readdir(d)) != NULL;)
+    foreign = strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0;
+  closedir(d);
+  return foreign;
+}
+
 static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const double *z,
                                int *width, int *height, lsm_err *err) {
   struct stat sb, in;
   if (stat(cli->out_dir, &sb) == 0) {
     if (!S_ISDIR(sb.st_mode))
       return lsm_fail(err, LSM_ERR_INPUT, cli->out_dir, "exists and is not a folder");
-    /* OUT is replaced as a whole: it must not be, or contain, the input folder. */
-    char *out_real = realpath(cli->out_dir, NULL), *in_real = realpath(cli->slice_dir, NULL);
+    /* OUT is replaced as a whole: it must not be, or contain, the input folder
+     * or the heights file, and a folder that is not an earlier result (no
+     * run.json) but holds something is left alone. */
+    char *out_real = realpath(cli->out_dir, NULL);
     int clash = stat(cli->slice_dir, &in) == 0 && in.st_dev == sb.st_dev && in.st_ino == sb.st_ino;
-    if (out_real && in_real) {
-      size_t n = strlen(out_real);
-      if (strncmp(in_real, out_real, n) == 0 && (in_real[n] == '/' || in_real[n] == '\0' ||
-                                                 (n == 1 && out_real[0] == '/')))
-        clash = 1;
-    }
+    clash = clash || path_within(cli->slice_dir, out_real);
+    const int heights_inside = cli->heights_file && path_within(cli->heights_file, out_real);
     free(out_real);
-    free(in_real);
     if (clash)
       return lsm_fail(err, LSM_ERR_INPUT, cli->out_dir,
                       "is or contains the input folder %s, which replacing it would delete",
                       cli->slice_dir);
+    if (heights_inside)
+      return lsm_fail(err, LSM_ERR_INPUT, cli->out_dir,
+                      "contains the heights file %s, which replacing it would delete",
+                      cli->heights_file);
+    if (foreign_folder(cli->out_dir))
+      return lsm_fail(err, LSM_ERR_INPUT, cli->out_dir,
+                      "exists, is not empty and is not an earlier lsmorph result (no run.json): "
+                      "lsmorph replaces OUT_DIR as a whole; remove it or name a new folder");
   }
   for (size_t k = 0; k < src->count; ++k) {
     if (!isfinite(z[k]))

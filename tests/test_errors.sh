@@ -205,6 +205,18 @@ sum=$(fingerprint good)
 expect "OUT is the input folder" 1 "good: is or contains the input folder" - reconstruct good -o good -q
 expect "OUT contains the input folder" 1 "is or contains the input folder good" - reconstruct good -o . -q
 if [ "$(fingerprint good)" = "$sum" ]; then ok; else bad "the input folder was changed"; fi
+# a folder that is not an earlier result is never replaced: nor one holding the heights file
+mkdir -p mine && echo precious >mine/notes.txt && printf '0\n1\n2\n' >mine/z.txt
+sum=$(fingerprint mine)
+expect "OUT is a foreign folder" 1 "mine: exists, is not empty and is not an earlier lsmorph result" - \
+  reconstruct good -o mine -q
+expect "OUT contains the heights file" 1 "mine: contains the heights file mine/z.txt" - \
+  reconstruct good -o mine --heights mine/z.txt -q
+if [ "$(fingerprint mine)" = "$sum" ]; then ok; else bad "a foreign OUT folder was changed"; fi
+mkdir -p empty-out
+"$LSM" reconstruct good -o empty-out -q --no-preview >/dev/null 2>"$TMP/stderr" &&
+  "$LSM" reconstruct good -o empty-out -q --no-preview >/dev/null 2>>"$TMP/stderr"
+if [ $? -eq 0 ] && [ -f empty-out/run.json ]; then ok; else bad "an empty OUT, then an earlier result: $(cat "$TMP/stderr")"; fi
 
 # ---- numerical blow-up: named with the pair and the iteration ------------------------------------------------
 expect "CFL blow-up" 1 "good/1.png -> 2.png (gap 1 of 2): iteration" out \
