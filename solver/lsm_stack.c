@@ -1434,7 +1434,13 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
   /* Default mode: the regular output grid, split by gap. */
   r.total = lsm_stack_output_count(src->z, src->count, dz);
   const size_t K = r.total;
-  const double z0 = src->z[0], eps = 1e-6 * dz;
+  /* an output height within eps of an input height is that input slice: a
+   * millionth of the output spacing, or of the closest pair of input heights
+   * where they are closer still (a gap thinner than eps would otherwise give
+   * its first output height to the wrong slice) */
+  double min_gap = dz;
+  for (size_t i = 0; i + 1 < src->count; ++i) min_gap = fmin(min_gap, src->z[i + 1] - src->z[i]);
+  const double z0 = src->z[0], eps = 1e-6 * min_gap;
   gap_plan *plan = st == LSM_OK ? lsm_alloc(gaps, sizeof *plan, err, "gap plan") : NULL;
   if (st == LSM_OK && !plan) st = err ? err->status : LSM_ERR_NOMEM;
   size_t k = 0;

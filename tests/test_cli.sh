@@ -134,6 +134,17 @@ assert d["output"]["slices"] == 25 and d["output"]["evenly_spaced"] is True, d["
 fi
 check "no temporary folder left next to OUT" sh -c "! ls -d '$OUT'.tmp-* >/dev/null 2>&1"
 
+# Input heights far closer than --dz: the one output slice, at the first height, is the first
+# input slice (the output grid gave it to a later slice when the gaps were under 1e-6 dz).
+"$LSM" reconstruct "$SET" -o "$TMP/out-far" --input outline --spacing 1 --dz 1000 -q --no-preview \
+  >"$TMP/o" 2>"$TMP/e" &&
+  "$LSM" reconstruct "$SET" -o "$TMP/out-near" --input outline --spacing 1e-7 -q --no-preview \
+    >"$TMP/o" 2>>"$TMP/e"
+rc=$?
+check "close heights run (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "heights 1e-7 apart: one output slice, the first input's" \
+  sh -c "[ \$(ls '$TMP/out-near/slices' | wc -l) -eq 1 ] && cmp -s '$TMP/out-far/slices/00001.png' '$TMP/out-near/slices/00001.png'"
+
 # --per-iteration: each pair has its own slice count, so the heights are uneven; the volume
 # files hold one spacing, and run.json and a note say so.
 "$LSM" reconstruct "$SET" -o "$TMP/out-iter" --input outline --heights "$SET/heights.txt" \
