@@ -137,6 +137,12 @@ static int png_read_guarded(png_reader *r) {
   png_set_read_fn(r->png, &r->io, on_png_read);
   png_set_sig_bytes(r->png, PNG_SIG_BYTES);
   png_set_user_limits(r->png, PNG_DIM_MAX, PNG_DIM_MAX);
+  /* text chunks mean nothing to a mask: skip them unread (libpng allocated
+   * what one claimed before reading it, 2 GB for a 44-byte file), and cap
+   * what any other ancillary chunk may allocate */
+  static const png_byte text_chunks[] = "tEXt\0zTXt\0iTXt";
+  png_set_keep_unknown_chunks(r->png, PNG_HANDLE_CHUNK_NEVER, text_chunks, 3);
+  png_set_chunk_malloc_max(r->png, (png_alloc_size_t)16 << 20);
   png_read_info(r->png, r->info);
   r->width = png_get_image_width(r->png, r->info);
   r->height = png_get_image_height(r->png, r->info);

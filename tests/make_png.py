@@ -11,11 +11,13 @@ SIZE x SIZE dark background, default SIZE 32; SIZE may also be WxH):
   gray8 gray16 gray1 graya8 rgb8 rgb16 rgba8 rgba16 palette palette_trns
   interlaced (8-bit gray, Adam7)  empty (8-bit gray, all dark)
   label01 (8-bit gray, the disc stored as label value 1 on 0)
+  text_chunks (8-bit gray with tEXt, zTXt and iTXt chunks before IDAT)
 Bad ones:
   bad_crc (IHDR CRC wrong)  bad_idat_crc  bad_zlib (IDAT is not zlib data)
   truncated (cut in the middle of IDAT)  no_iend  text (not a PNG)  zero (0 bytes)
   huge (a valid signature and IHDR of 200000 x 200000 pixels, then nothing)
   huge_idat (the same header with a short IDAT and IEND)
+  text_liar (IHDR, then a tEXt chunk that claims 2^31 - 1 bytes and ends the file)
 """
 import struct
 import sys
@@ -134,6 +136,13 @@ def make(kind, out, arg="32", radius=None):
     radius = float(radius) if radius is not None else min(size) / 4.0
     if kind in HEADER:
         data = good(kind, size, radius)
+    elif kind == "text_chunks":
+        g = good("gray8", size, radius)
+        data = (g[:33] + chunk(b"tEXt", b"Comment\x00drawn by hand") +
+                chunk(b"zTXt", b"Software\x00\x00" + zlib.compress(b"a mask")) +
+                chunk(b"iTXt", b"Title\x00\x00\x00en\x00\x00mask") + g[33:])
+    elif kind == "text_liar":
+        data = SIG + ihdr(size[0], size[1], 8, 0) + struct.pack(">I", 0x7FFFFFFF) + b"tEXt" + b"Comment\x00"
     elif kind == "bad_crc":
         data = SIG + chunk(b"IHDR", struct.pack(">IIBBBBB", size[0], size[1], 8, 0, 0, 0, 0), crc=0x12345678)
         data += good("gray8", size, radius)[33:]
