@@ -1263,7 +1263,8 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
  * have their own queue, kernels and buffers (one context), so gaps run side
  * by side there too: the host work of one gap (distance transforms, slopes,
  * combining, writing) overlaps the device work of the others. */
-static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps) {
+static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps,
+                       size_t most_slices) {
   const int threads = o->morph.threads < 1 ? 1 : o->morph.threads;
   const int device = o->morph.backend && o->morph.backend->ops != lsm_backend_c_ops();
   if (threads == 1 || gaps < 2) return 1;
@@ -1274,6 +1275,12 @@ static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t ga
    * 2^26 pixels of slices in flight (four 4096^2 gaps, one 8192^2) */
   const long long cap = pixels > 0 ? (1LL << 26) / pixels : workers;
   if (device && workers > cap) workers = cap > 1 ? cap : 1;
+  /* a gap in flight also buffers its output slices until its turn to write
+   * them: at most 512 MiB of them in all (1024^2 slices with --dz 0.01 over
+   * gaps of 10 buffered 4 GB per gap); one worker writes as it goes */
+  const double buffered = (double)most_slices * (double)pixels * sizeof(float);
+  const long long fit = buffered > 0.0 ? (long long)((double)(1LL << 29) / buffered) : workers;
+  if (workers > fit) workers = fit > 1 ? fit : 1;
   return (int)workers;
 }
 
@@ -1449,7 +1456,11 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
     while (k < K && z0 + (double)k * dz < src->z[i + 1] - eps) ++k;
     plan[i].last = k;
   }
-  const int workers = st == LSM_OK && !distributed ? gap_workers(opts, width, height, gaps) : 1;
+  size_t most_slices = 0;
+  for (size_t i = 0; st == LSM_OK && i < gaps; ++i)
+    if (plan[i].last - plan[i].first > most_slices) most_slices = plan[i].last - plan[i].first;
+  const int workers =
+      st == LSM_OK && !distributed ? gap_workers(opts, width, height, gaps, most_slices) : 1;
   r.gap_workers = workers;
   if (st == LSM_OK && distributed) {
     st = run_distributed(&r, plan, z0, dz, eps, stats, err);
