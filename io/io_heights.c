@@ -70,6 +70,7 @@ lsm_status lsm_heights_parse(const char *text, size_t length, const char *name,
   size_t n = 0, cap = 0, line_no = 0;
   lsm_status st = LSM_OK;
   size_t pos = 0;
+  if (length >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0) pos = 3; /* a UTF-8 byte order mark */
   while (st == LSM_OK && pos < length) {
     ++line_no;
     const char *start = text + pos;
@@ -77,10 +78,12 @@ lsm_status lsm_heights_parse(const char *text, size_t length, const char *name,
     size_t len = nl ? (size_t)(nl - start) : length - pos;
     pos += len + (nl ? 1 : 0);
 
-    /* trim */
+    /* a comment runs from '#' to the end of the line; trim the rest */
+    const char *hash = memchr(start, '#', len);
+    if (hash) len = (size_t)(hash - start);
     while (len > 0 && is_space(*start)) ++start, --len;
     while (len > 0 && is_space(start[len - 1])) --len;
-    if (len == 0 || start[0] == '#') continue;
+    if (len == 0) continue;
     if (memchr(start, '\0', len)) {
       st = lsm_fail(err, LSM_ERR_INPUT, name, "line %zu: contains a NUL byte", line_no);
       break;

@@ -216,11 +216,11 @@ static void test_natural_cmp(void **state) {
 static void test_heights_good(void **state) {
   (void)state;
   const char *text =
-      "# slice heights in mm\n"
+      "\xEF\xBB\xBF# slice heights in mm, after a UTF-8 byte order mark\n"
       "\n"
-      "  -3.5\n"
+      "  -3.5 # the first slice\n"
       "-1e-1\r\n"
-      "\t0\n"
+      "\t0#no space before the comment\n"
       "# comment in the middle\n"
       "   \n"
       "2.5E+1  \n"
@@ -254,6 +254,8 @@ static void test_heights_bad(void **state) {
       {"1\n1e999\n", "line 2:"},
       {"1\n3\n\n2\n", "line 4: 2 is not greater than the previous height 3"},
       {"# c\n0.5\n0.5\n", "line 3: 0.5 is not greater than the previous height 0.5"},
+      {"1\n2 3 # two values\n", "line 2: \"2 3\" is not a number"},
+      {"\xEF\xBB1\n", "line 1:"}, /* half a byte order mark */
       {"", "no heights"},
       {"# only a comment\n\n   \n", "no heights"},
   };
