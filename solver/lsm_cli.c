@@ -180,7 +180,10 @@ static const char score_help[] =
     "  mean_surface     mean surface distance over the slices non-empty on both sides\n"
     "  volume_error     (result - truth) / truth volume over the held-out slices\n"
     "  one_sided_empty  held-out slices empty on one side only\n"
-    "A score that is undefined (no boundary anywhere, an empty truth) is null.\n";
+    "A score that is undefined (no boundary anywhere, an empty truth) is null.\n"
+    "A result that does not fit TRUTH_DIR and K is refused: its slice count must be\n"
+    "the one --spacing K gives, its run.json must count the kept slices, and every\n"
+    "kept slice must come back exactly.\n";
 
 void lsm_cli_help(FILE *f, const char *topic) {
   if (topic && strcmp(topic, "reconstruct") == 0) {
@@ -413,6 +416,8 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   }
   if (!cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing SLICE_DIR");
   if (!cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing -o OUT_DIR");
+  if (!*cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "-o: the output folder name is empty");
+  if (!*cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: SLICE_DIR is empty");
   if (so->per_iteration && so->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a level-set method (--method ls or pls)");
   return LSM_OK;
@@ -459,6 +464,10 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   if (strcmp(cmd, "help") == 0) {
     cli->command = LSM_CMD_HELP;
     cli->help_topic = argc > 2 ? argv[2] : NULL;
+    if (cli->help_topic && strcmp(cli->help_topic, "reconstruct") != 0 &&
+        strcmp(cli->help_topic, "score") != 0)
+      return lsm_fail(err, LSM_ERR_USAGE, NULL,
+                      "help: no command '%s' (help reconstruct, help score)", cli->help_topic);
     return LSM_OK;
   }
   if (strcmp(cmd, "-V") == 0 || strcmp(cmd, "--version") == 0) {

@@ -162,6 +162,36 @@ static lsm_status pick_foreground(char **paths, size_t count, lsm_png_read_opts 
   return LSM_OK;
 }
 
+/* With --input outline, a note when the first non-empty slice looks filled
+ * (most of its foreground pixels have all four neighbours in it): outlines
+ * are thin contours, and a filled region read as one has no inside. */
+static void note_filled_outlines(const png_source *src, const char *dir) {
+  for (size_t k = 0; k < src->count; ++k) {
+    lsm_mask m = {0, 0, NULL};
+    lsm_err ignored;
+    lsm_err_clear(&ignored);
+    if (lsm_png_read_mask(src->paths[k], &src->read, &m, &ignored) != LSM_OK) return;
+    size_t fg = 0, interior = 0;
+    for (int j = 0; j < m.height; ++j)
+      for (int i = 0; i < m.width; ++i) {
+        const uint8_t *p = m.pixels + (size_t)j * (size_t)m.width + (size_t)i;
+        if (!*p) continue;
+        fg++;
+        interior += i > 0 && i + 1 < m.width && j > 0 && j + 1 < m.height && p[-1] && p[1] &&
+                    p[-m.width] && p[m.width];
+      }
+    lsm_mask_free(&m);
+    if (!fg) continue;
+    if (2 * interior > fg)
+      fprintf(stderr,
+              "lsmorph: note: %s: --input outline, but %s looks filled (%.0f %% of its foreground "
+              "pixels are interior): outlines are thin closed contours; filled regions need "
+              "--input mask\n",
+              dir, base_name(src->paths[k]), 100.0 * (double)interior / (double)fg);
+    return;
+  }
+}
+
 static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
   png_source *ps = ctx;
   LSM_TRY(check_stop(err));
@@ -733,6 +763,12 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   if (st == LSM_OK) st = check_inputs(cli, &src, z, &width, &height, err);
   if (st == LSM_OK)
     st = pick_foreground(src.paths, src.count, &src.read, cli->quiet, cli->slice_dir, err);
+  if (st == LSM_OK && !cli->quiet) {
+    if (cli->stack.input == LSM_INPUT_OUTLINE) note_filled_outlines(&src, cli->slice_dir);
+    if (cli->stack.per_iteration && cli->stack.dz > 0)
+      fprintf(stderr, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
+                      "iteration is a slice)\n");
+  }
   const int threads = setup_run(cli);
   lsm_backend *backend = NULL;
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
@@ -855,6 +891,25 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
 
 /* ---- score ------------------------------------------------------------------------------ */
 
+/* The input slice count that OUT_DIR/run.json records ("input": {...,
+ * "slices": N), or 0 when there is no run.json or it does not say. */
+static size_t result_input_count(const char *result_dir) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/run.json", result_dir);
+  FILE *f = fopen(path, "rb");
+  if (!f) return 0;
+  char head[1 << 16]; /* the input object comes before the per-pair list */
+  const size_t len = fread(head, 1, sizeof head - 1, f);
+  fclose(f);
+  head[len] = '\0';
+  const char *input = strstr(head, "\"input\": {\"folder\": ");
+  const char *slices = input ? strstr(input, "\"slices\": ") : NULL;
+  if (!slices) return 0;
+  char *end = NULL;
+  const unsigned long long count = strtoull(slices + strlen("\"slices\": "), &end, 10);
+  return end && (*end == ',' || *end == '}') ? (size_t)count : 0;
+}
+
 static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   char **truth = NULL;
   size_t n = 0;
@@ -872,13 +927,47 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   /* truth stored as 0/1 labels is read as such (the result slices are 0/255) */
   lsm_status st = pick_foreground(truth, n, &ro_truth, 1, cli->truth_dir, err);
   const size_t last_input = (n - 1) / (size_t)cli->stride * (size_t)cli->stride;
+  if (st == LSM_OK) {
+    /* a result of another stride or stack would be scored against the wrong
+     * slices: its slice count must be the one this truth and stride give */
+    char dir[4200], **result = NULL;
+    size_t m = 0;
+    snprintf(dir, sizeof dir, "%s/slices", cli->result_dir);
+    st = lsm_dir_list_png(dir, &result, &m, err);
+    lsm_path_list_free(result, m);
+    if (st == LSM_OK && m != last_input + 1)
+      st = lsm_fail(err, LSM_ERR_INPUT, dir,
+                    "%zu slices, but slices 1, %d, %d, ... of the %zu truth slices, "
+                    "reconstructed with --spacing %d and the default --dz, give %zu",
+                    m, cli->stride + 1, 2 * cli->stride + 1, n, cli->stride, last_input + 1);
+    const size_t inputs = st == LSM_OK ? result_input_count(cli->result_dir) : 0;
+    if (inputs && inputs != last_input / (size_t)cli->stride + 1)
+      st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
+                    "was made from %zu slices (run.json), but --stride %d keeps %zu of the %zu "
+                    "truth slices",
+                    inputs, cli->stride, last_input / (size_t)cli->stride + 1, n);
+  }
   for (size_t k = 0; st == LSM_OK && k <= last_input && k < n; ++k) {
-    if (k % (size_t)cli->stride == 0) continue;
     char path[4200];
     snprintf(path, sizeof path, "%s/slices/%05zu.png", cli->result_dir, k + 1);
     lsm_mask a = {0}, b = {0};
     st = lsm_png_read_mask(path, &ro, &a, err);
     if (st == LSM_OK) st = lsm_png_read_mask(truth[k], &ro_truth, &b, err);
+    if (st == LSM_OK && (a.width != b.width || a.height != b.height))
+      st = lsm_fail(err, LSM_ERR_INPUT, path, "slice is %dx%d but the truth slice %s is %dx%d",
+                    a.width, a.height, truth[k], b.width, b.height);
+    if (k % (size_t)cli->stride == 0) {
+      /* an input slice comes back exactly: otherwise the result was not made
+       * from every stride-th slice of this truth */
+      if (st == LSM_OK && memcmp(a.pixels, b.pixels, (size_t)a.width * (size_t)a.height) != 0)
+        st = lsm_fail(err, LSM_ERR_INPUT, path,
+                      "differs from the truth slice %s, which --stride %d makes an input: was "
+                      "the result made from slices 1, %d, %d, ... of %s?",
+                      truth[k], cli->stride, cli->stride + 1, 2 * cli->stride + 1, cli->truth_dir);
+      lsm_mask_free(&a);
+      lsm_mask_free(&b);
+      continue;
+    }
     lsm_slice_score s;
     if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, &pool, &pool_n, &pool_cap, err);
     if (st == LSM_OK) {

@@ -153,6 +153,7 @@ rc=$?
 check "--per-iteration exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "--per-iteration: run.json says \"evenly_spaced\": false" grep -q '"evenly_spaced": false' "$TMP/out-iter/run.json"
 check "--per-iteration: a note says the slices are not evenly spaced" grep -q "note: the output slices are not evenly spaced" "$TMP/e"
+check "outline pyramid: no note that it looks filled" sh -c "! grep -q 'looks filled' '$TMP/e'"
 
 # --ends changes only gaps next to an empty slice: the pyramid has none.
 "$LSM" reconstruct "$SET" -o "$TMP/out-halfway" --input outline --heights "$SET/heights.txt" \

@@ -78,6 +78,10 @@ for i in 1 2 3; do png gray8 "good/$i.png" 32 $((3 + 2 * i)); done
 for i in 1 2 3; do png gray8 "late/$i.png" 128 30; done # late: only the last two gaps move
 png gray8 late/4.png 128 5
 png gray8 late/5.png 128 40
+for i in 1 2 3 4 5 6 7 8 9; do # tall: 9 discs; tall40: the same on 40x40
+  png gray8 "tall/$i.png" 32 $((4 + i))
+  png gray8 "tall40/$i.png" 40 $((4 + i))
+done
 for kind in text zero truncated no_iend bad_crc bad_idat_crc bad_zlib text_liar; do
   png gray8 "b-$kind/1.png" 32 5
   png "$kind" "b-$kind/2.png" 32
@@ -189,12 +193,42 @@ expect "flag with a value" 2 "--invert takes no value" out reconstruct good -o o
 expect "option without its value" 2 "-o needs a value" - reconstruct good -o
 expect "missing -o" 2 "missing -o OUT_DIR" - reconstruct good
 expect "unknown command" 2 "unknown command 'rebuild'" - rebuild good -o out
+expect "help on no command" 2 "help: no command 'bogus'" - help bogus
+expect "empty -o" 2 "-o: the output folder name is empty" - reconstruct good -o ""
+# filled discs given as outlines: run, but a note says they look filled
+"$LSM" reconstruct good -o out-outline --input outline --no-preview >/dev/null 2>"$TMP/stderr"
+if [ $? -eq 0 ] && grep -q "note: good: --input outline, but 1.png looks filled" "$TMP/stderr"; then
+  ok
+else
+  bad "filled slices as outlines: no note ($(cat "$TMP/stderr"))"
+fi
 
 # ---- score ----------------------------------------------------------------------------------------------
 expect "score: no truth slices" 1 "empty: 0 PNG files: --stride 2 needs at least 3" - score empty ref --stride 2
 expect "score: nothing held out" 1 "good: 3 PNG files: --stride 3 needs at least 4" - score good ref --stride 3
-expect "score: missing result" 1 "nothing/slices/00002.png: cannot open" - score good nothing --stride 2
+expect "score: missing result" 1 "nothing/slices: no such folder" - score good nothing --stride 2
 expect "score: bad --stride" 2 "--stride: 1 is out of range" - score good ref --stride 1
+# a result scored with another stride than it was made with, or against another stack
+mkdir -p tall2 tall4 && cp tall/1.png tall/3.png tall/5.png tall/7.png tall/9.png tall2/ &&
+  cp tall/1.png tall/5.png tall/9.png tall4/
+"$LSM" reconstruct tall2 -o r2 --spacing 2 -q --no-preview >/dev/null 2>"$TMP/stderr" &&
+  "$LSM" reconstruct tall4 -o r4 --spacing 4 -q --no-preview >/dev/null 2>>"$TMP/stderr" &&
+  "$LSM" score tall r2 --stride 2 >/dev/null 2>>"$TMP/stderr" &&
+  "$LSM" score tall r4 --stride 4 >/dev/null 2>>"$TMP/stderr"
+if [ $? -eq 0 ]; then ok; else bad "score of the right strides: $(cat "$TMP/stderr")"; fi
+expect "score: stride 4 on a stride-2 result" 1 \
+  "r2: was made from 5 slices (run.json), but --stride 4 keeps 3 of the 9 truth slices" - score tall r2 --stride 4
+expect "score: stride 2 on a stride-4 result" 1 \
+  "r4: was made from 3 slices (run.json), but --stride 2 keeps 5 of the 9 truth slices" - score tall r4 --stride 2
+cp -r r4 r4-bare && rm r4-bare/run.json # without run.json the inputs still tell
+expect "score: stride 2 on a stride-4 result without run.json" 1 \
+  "r4-bare/slices/00003.png: differs from the truth slice tall/3.png, which --stride 2 makes an input" - \
+  score tall r4-bare --stride 2
+expect "score: stride 3 on a stride-2 result" 1 \
+  "r2/slices: 9 slices, but slices 1, 4, 7, ... of the 9 truth slices, reconstructed with --spacing 3" - \
+  score tall r2 --stride 3
+expect "score: another size" 1 "r2/slices/00001.png: slice is 32x32 but the truth slice tall40/1.png is 40x40" - \
+  score tall40 r2 --stride 2
 
 # ---- output path ------------------------------------------------------------------------------------------
 expect "OUT under a regular file" 1 "afile/out: cannot create a folder next to it: Not a directory" \
@@ -261,7 +295,9 @@ else
   bad "all-empty slices: exit $rc ($(cat "$TMP/stderr"))"
 fi
 # score prints strict JSON: undefined scores (no boundary anywhere, an empty truth) are null, not nan
-"$LSM" score k-empty out-empty --stride 2 >"$TMP/stdout" 2>"$TMP/stderr"
+mkdir -p e13 && cp k-empty/1.png k-empty/3.png e13/
+"$LSM" reconstruct e13 -o out-e13 --spacing 2 -q --no-preview >/dev/null 2>"$TMP/stderr" &&
+  "$LSM" score k-empty out-e13 --stride 2 >"$TMP/stdout" 2>>"$TMP/stderr"
 rc=$?
 if [ $rc -eq 0 ] && "$PY" -c 'import json, sys
 def reject(c): raise ValueError(c)
