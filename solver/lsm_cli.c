@@ -416,10 +416,13 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   }
   if (!cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing SLICE_DIR");
   if (!cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing -o OUT_DIR");
-  if (!*cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "-o: the output folder name is empty");
-  if (!*cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: SLICE_DIR is empty");
+  if (!*cli->out_dir)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "-o: the output folder name is empty");
+  if (!*cli->slice_dir)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: SLICE_DIR is empty");
   if (so->per_iteration && so->method == LSM_METHOD_BLEND)
-    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a level-set method (--method ls or pls)");
+    return lsm_fail(err, LSM_ERR_USAGE, NULL,
+                    "--per-iteration needs a level-set method (--method ls or pls)");
   return LSM_OK;
 }
 

@@ -256,7 +256,8 @@ static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, 
   if (s->mesh && higher) LSM_TRY(lsm_mesh_add_slice(s->mesh, phi, z, err));
   if (s->preview && higher) LSM_TRY(lsm_preview_add_slice(s->preview, phi, z, input_index, err));
   if (fprintf(s->heights, "%.17g\n", z) < 0)
-    return lsm_fail(err, LSM_ERR_IO, NULL, "%s/heights.txt: write failed: %s", s->dir, strerror(errno));
+    return lsm_fail(err, LSM_ERR_IO, NULL, "%s/heights.txt: write failed: %s", s->dir,
+                    strerror(errno));
   if (s->count == 0) {
     s->z_first = z;
   } else {
@@ -456,7 +457,8 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   fputs("]\n}\n", f);
   const int bad = ferror(f), closed = fclose(f);
   if (bad || closed != 0)
-    return lsm_fail(err, LSM_ERR_IO, path, "write failed: %s", closed != 0 ? strerror(errno) : "stream error");
+    return lsm_fail(err, LSM_ERR_IO, path, "write failed: %s",
+                    closed != 0 ? strerror(errno) : "stream error");
   return LSM_OK;
 }
 
@@ -531,13 +533,6 @@ static lsm_status publish(const char *tmp, const char *out_dir, lsm_err *err) {
  * (the image plus alignment margins, at most three times a side) within an int. */
 #define LSM_SIDE_MAX (1 << 24)
 
-/* Checks made before anything is allocated for the run or written:
- * the output path, the heights, every slice header (PNG signature and IHDR:
- * all slices the same size), and the resource limits: pixels per slice
- * (--max-pixels), the longest side, the working canvas of an aligned gap and
- * the voxels of the output volume (--max-voxels).  All sizes are computed in
- * 64-bit or double arithmetic, so nothing can wrap around.  On success
- * *width x *height is the slice size. */
 /* Whether the path `inner` (resolved) is `outer_real` or lies inside it. */
 static int path_within(const char *inner, const char *outer_real) {
   char *inner_real = realpath(inner, NULL);
@@ -547,13 +542,14 @@ static int path_within(const char *inner, const char *outer_real) {
   }
   const size_t n = strlen(outer_real);
   const int within = strncmp(inner_real, outer_real, n) == 0 &&
-                     (inner_real[n] == '/' || inner_real[n] == '\0' || (n == 1 && outer_real[0] == '/'));
+                     (inner_real[n] == '/' || inner_real[n] == '\0' ||
+                      (n == 1 && outer_real[0] == '/'));
   free(inner_real);
   return within;
 }
 
-/* Whether the folder `dir` holds anything but run.json says it is not an
- * earlier result: 1 for a non-empty folder without run.json. */
+/* 1 when the folder `dir` is not empty and has no run.json: not an earlier
+ * result, so not lsmorph's to replace. */
 static int foreign_folder(const char *dir) {
   char path[4200];
   snprintf(path, sizeof path, "%s/run.json", dir);
@@ -568,6 +564,13 @@ static int foreign_folder(const char *dir) {
   return foreign;
 }
 
+/* Checks made before anything is allocated for the run or written:
+ * the output path, the heights, every slice header (PNG signature and IHDR:
+ * all slices the same size), and the resource limits: pixels per slice
+ * (--max-pixels), the longest side, the working canvas of an aligned gap and
+ * the voxels of the output volume (--max-voxels).  All sizes are computed in
+ * 64-bit or double arithmetic, so nothing can wrap around.  On success
+ * *width x *height is the slice size. */
 static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const double *z,
                                int *width, int *height, lsm_err *err) {
   struct stat sb, in;
@@ -865,7 +868,8 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
                 "lsmorph: note: the output slices are not evenly spaced (steps %.4g to %.4g); "
                 "the volume files hold one z spacing, the mean (%.4g): heights.txt has each "
                 "slice's height\n",
-                sink.step_min, sink.step_max, (sink.z_last - sink.z_first) / (double)(sink.count - 1));
+                sink.step_min, sink.step_max,
+                (sink.z_last - sink.z_first) / (double)(sink.count - 1));
       const char *files[16];
       size_t nfiles = output_files(cli, files, 16);
       fprintf(stderr, "lsmorph: wrote %zu slices to %s (", sink.count, cli->out_dir);

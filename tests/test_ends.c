@@ -233,7 +233,8 @@ static void test_half_nested_end(void **state) {
   const double a_f = area(phi_f), a_n = area(phi_n), h = 8.0, H = 8.0;
   double nested = 0.0;
   for (int j = 0; j < SIZE; ++j)
-    for (int i = 0; i < SIZE; ++i) nested += LSM_AT(phi_f, i, j) <= 0.0f && LSM_AT(phi_n, i, j) <= 0.0f;
+    for (int i = 0; i < SIZE; ++i)
+      nested += LSM_AT(phi_f, i, j) <= 0.0f && LSM_AT(phi_n, i, j) <= 0.0f;
   const double w = (nested / a_f - 0.4) / 0.2;
   print_message("share inside N %.3f, weight %.3f\n", nested / a_f, w);
   assert_true(w > 0.25 && w < 0.75);
