@@ -110,13 +110,16 @@ lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, lsm_e
     if (need_slash) path[dir_len] = '/';
     memcpy(path + dir_len + (size_t)need_slash, name, name_len + 1);
 
-    struct stat fs;
+    struct stat fs, ls;
     if (stat(path, &fs) != 0) {
-      if (errno == ENOENT || errno == ELOOP) { /* dangling link or vanished: skip */
+      /* a file that vanished since the listing is skipped; a broken link is
+       * an error (skipping it would shift every later slice's height) */
+      if (errno == ENOENT && lstat(path, &ls) != 0) {
         free(path);
         continue;
       }
-      st = lsm_fail(err, LSM_ERR_INPUT, path, "cannot access: %s", strerror(errno));
+      st = lsm_fail(err, LSM_ERR_INPUT, path, "cannot access: %s",
+                    errno == ENOENT ? "a link to nothing" : strerror(errno));
       free(path);
       break;
     }

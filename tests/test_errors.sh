@@ -107,6 +107,9 @@ echo "a file" >afile
 expect "SLICE_DIR is a file" 1 "afile: not a folder" out reconstruct afile -o out -q
 mkdir one && cp good/1.png one/
 expect "a single slice" 1 "one: only one slice" out reconstruct one -o out -q
+mkdir linked && cp good/1.png good/3.png linked/ && ln -s nothing-here.png linked/2.png
+expect "a broken link among the slices" 1 "linked/2.png: cannot access: a link to nothing" out \
+  reconstruct linked -o out -q
 
 # ---- broken PNG files: each the second of two slices -------------------------------------------
 broken() { # broken KIND PHRASE
