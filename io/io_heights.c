@@ -37,9 +37,7 @@ static void quote_token(char *out, size_t size, const char *tok) {
   out[j] = '\0';
 }
 
-/* Only decimal / exponent notation: [sign] digits [. digits] [e [sign] digits].
- * (strtod alone would also take "nan", "inf" and hexadecimal.) */
-static int plain_number_syntax(const char *s) {
+int lsm_decimal_syntax(const char *s) {
   if (*s == '+' || *s == '-') ++s;
   int digits = 0;
   while (*s >= '0' && *s <= '9') ++s, ++digits;
@@ -93,7 +91,7 @@ lsm_status lsm_heights_parse(const char *text, size_t length, const char *name,
 
     char quoted[QUOTE_MAX + 8];
     quote_token(quoted, sizeof quoted, line);
-    if (!plain_number_syntax(line)) {
+    if (!lsm_decimal_syntax(line)) {
       st = lsm_fail(err, LSM_ERR_INPUT, name, "line %zu: \"%s\" is not a number", line_no, quoted);
       break;
     }

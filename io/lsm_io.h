@@ -78,6 +78,11 @@ void lsm_path_list_free(char **paths, size_t count);
 
 /* ---- heights -------------------------------------------------------------- */
 
+/* Whether s is a number in decimal or exponent notation only: [sign] digits
+ * [. digits] [e [sign] digits] (strtod alone also takes "nan", "inf" and
+ * hexadecimal).  Shared by the heights file and the command line. */
+int lsm_decimal_syntax(const char *s);
+
 /* Parses a heights file: one number per line (blank lines are skipped, a
  * '#' starts a comment to the end of its line, a UTF-8 byte order mark is
  * ignored; surrounding white space allowed; decimal or exponent notation).

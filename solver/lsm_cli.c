@@ -201,11 +201,12 @@ void lsm_cli_help(FILE *f, const char *topic) {
 
 static lsm_status parse_double(const char *opt, const char *text, double *out, int positive,
                                lsm_err *err) {
-  char *end = NULL;
-  errno = 0;
-  double v = strtod(text, &end);
-  if (end == text || *end != '\0' || errno == ERANGE || !isfinite(v))
+  if (!lsm_decimal_syntax(text))
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: '%s' is not a number", opt, text);
+  errno = 0;
+  const double v = strtod(text, NULL);
+  if (errno == ERANGE || !isfinite(v))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: '%s' is out of range", opt, text);
   if (positive && !(v > 0.0))
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: %s must be positive", opt, text);
   *out = v;

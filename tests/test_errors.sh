@@ -183,6 +183,8 @@ expect "--spacing -1" 2 "--spacing: -1 must be positive" out reconstruct good -o
 expect "--spacing nan" 2 "--spacing: 'nan' is not a number" out reconstruct good -o out --spacing nan
 expect "--spacing inf" 2 "--spacing: 'inf' is not a number" out reconstruct good -o out --spacing inf
 expect "--spacing junk" 2 "--spacing: '2mm' is not a number" out reconstruct good -o out --spacing 2mm
+expect "--spacing hexadecimal" 2 "--spacing: '0x10' is not a number" out reconstruct good -o out --spacing 0x10
+expect "--spacing underflows" 2 "--spacing: '5e-324' is out of range" out reconstruct good -o out --spacing 5e-324
 expect "--pixel-size 0" 2 "--pixel-size: 0 must be positive" out reconstruct good -o out --pixel-size 0
 expect "--pixel-size -0.5" 2 "--pixel-size: -0.5 must be positive" out reconstruct good -o out --pixel-size=-0.5
 expect "--dz 0" 2 "--dz: 0 must be positive" out reconstruct good -o out --dz 0
