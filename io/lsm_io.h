@@ -86,7 +86,8 @@ int lsm_decimal_syntax(const char *s);
 /* Parses a heights file: one number per line (blank lines are skipped, a
  * '#' starts a comment to the end of its line, a UTF-8 byte order mark is
  * ignored; surrounding white space allowed; decimal or exponent notation).
- * Each value must be finite and strictly greater than the one before.  On success *z is malloc'd with *count values. */
+ * Each value must be finite and strictly greater than the one before.  On
+ * success *z is malloc'd with *count values. */
 lsm_status lsm_heights_parse(const char *text, size_t length, const char *name,
                              double **z, size_t *count, lsm_err *err);
 lsm_status lsm_heights_read(const char *path, double **z, size_t *count, lsm_err *err);

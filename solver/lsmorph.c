@@ -241,6 +241,11 @@ static size_t output_files(const lsm_cli *cli, const char **names, size_t cap) {
   return n;
 }
 
+/* The mean step between output heights (0 for fewer than two slices). */
+static double sink_mean_step(const out_sink *s) {
+  return s->count > 1 ? (s->z_last - s->z_first) / (double)(s->count - 1) : 0.0;
+}
+
 /* Whether the output heights are evenly spaced (always so but with
  * --per-iteration, whose pairs each have their own iteration count). */
 static int sink_evenly_spaced(const out_sink *s) {
@@ -824,7 +829,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   if (st == LSM_OK) {
     double sz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
     if (cli->stack.per_iteration && sink.count > 1)
-      sz = (sink.z_last - sink.z_first) / (double)(sink.count - 1);
+      sz = sink_mean_step(&sink);
     st = lsm_volume_writer_finish(&sink.volume, sz, sink.count, err);
   }
   if (st == LSM_OK && sink.mesh) {
@@ -868,8 +873,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
                 "lsmorph: note: the output slices are not evenly spaced (steps %.4g to %.4g); "
                 "the volume files hold one z spacing, the mean (%.4g): heights.txt has each "
                 "slice's height\n",
-                sink.step_min, sink.step_max,
-                (sink.z_last - sink.z_first) / (double)(sink.count - 1));
+                sink.step_min, sink.step_max, sink_mean_step(&sink));
       const char *files[16];
       size_t nfiles = output_files(cli, files, 16);
       fprintf(stderr, "lsmorph: wrote %zu slices to %s (", sink.count, cli->out_dir);
