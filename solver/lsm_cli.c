@@ -45,7 +45,9 @@ static const char reconstruct_help[] =
     "  --spacing Z            distance between consecutive slices (default 1)\n"
     "  --heights FILE         one height per slice, strictly increasing (overrides --spacing)\n"
     "  --pixel-size S         physical size of a pixel (default 1); all distances,\n"
-    "                         heights and the output signed distance use this unit\n"
+    "                         heights and the output signed distance use this unit;\n"
+    "                         the pixel size, --spacing, --dz and every gap between\n"
+    "                         heights must lie in 1e-30 .. 1e30 (lengths are floats)\n"
     "  --max-pixels N         refuse slices with more pixels (default 268435456); with\n"
     "                         --align auto|hull also a gap's working canvas, up to\n"
     "                         (2W+4) x (2H+4) cells for W x H slices, must stay\n"
@@ -213,6 +215,20 @@ static lsm_status parse_double(const char *opt, const char *text, double *out, i
   return LSM_OK;
 }
 
+/* A length option (--pixel-size, --spacing, --dz): a positive number within
+ * the range the solver's floats hold (LSM_LENGTH_MIN .. LSM_LENGTH_MAX). */
+static lsm_status parse_length(const char *opt, const char *text, double *out, lsm_err *err) {
+  double v = 0.0;
+  LSM_TRY(parse_double(opt, text, &v, 1, err));
+  if (!(v >= LSM_LENGTH_MIN && v <= LSM_LENGTH_MAX))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL,
+                    "%s: %s is outside %g to %g (lengths are held as floats; choose a unit that "
+                    "brings it into range)",
+                    opt, text, LSM_LENGTH_MIN, LSM_LENGTH_MAX);
+  *out = v;
+  return LSM_OK;
+}
+
 static lsm_status parse_int(const char *opt, const char *text, long min, long max, long *out,
                             lsm_err *err) {
   char *end = NULL;
@@ -298,16 +314,16 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       cli->invert = 1;
     } else if (IS("--spacing")) {
       NEEDS_VALUE();
-      LSM_TRY(parse_double(name, v, &cli->spacing, 1, err));
+      LSM_TRY(parse_length(name, v, &cli->spacing, err));
     } else if (IS("--heights")) {
       NEEDS_VALUE();
       cli->heights_file = v;
     } else if (IS("--pixel-size")) {
       NEEDS_VALUE();
-      LSM_TRY(parse_double(name, v, &so->pixel_size, 1, err));
+      LSM_TRY(parse_length(name, v, &so->pixel_size, err));
     } else if (IS("--dz")) {
       NEEDS_VALUE();
-      LSM_TRY(parse_double(name, v, &so->dz, 1, err));
+      LSM_TRY(parse_length(name, v, &so->dz, err));
     } else if (IS("--per-iteration")) {
       so->per_iteration = 1;
     } else if (IS("--no-slices")) {

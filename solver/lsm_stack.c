@@ -160,9 +160,15 @@ static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy
  * secants d0, d1 (the weighted harmonic mean of Fritsch & Butland, as in
  * Moler's pchip): zero at a local extremum, so the Hermite cubic stays within
  * the range of its two knots — no overshoot. */
+static inline int same_sign(float a, float b) { return (a > 0.0f && b > 0.0f) || (a < 0.0f && b < 0.0f); }
+
+/* The weights are divided by h0 + h1 and the signs compared, not multiplied:
+ * h in physical z units and d = dphi / h, the products d0 d1 and w / d
+ * under- or overflowed a float where a gap is more than about 1e17 pixel
+ * sizes long or less than 1e-22 (the result depended on the units). */
 static inline float pchip_slope(float h0, float h1, float d0, float d1) {
-  if (d0 * d1 <= 0.0f) return 0.0f;
-  const float w1 = 2.0f * h1 + h0, w2 = h1 + 2.0f * h0;
+  if (!same_sign(d0, d1)) return 0.0f;
+  const float hs = h0 + h1, w1 = (2.0f * h1 + h0) / hs, w2 = (h1 + 2.0f * h0) / hs;
   return (w1 + w2) / (w1 / d0 + w2 / d1);
 }
 
@@ -170,9 +176,9 @@ static inline float pchip_slope(float h0, float h1, float d0, float d1) {
  * formula, shape preserving): h0, d0 the last interval and its secant, h1, d1
  * the one before it. */
 static inline float pchip_edge_slope(float h0, float h1, float d0, float d1) {
-  const float m = ((2.0f * h0 + h1) * d0 - h0 * d1) / (h0 + h1);
-  if (m * d0 <= 0.0f) return 0.0f;
-  if (d0 * d1 < 0.0f && fabsf(m) > 3.0f * fabsf(d0)) return 3.0f * d0;
+  const float hs = h0 + h1, m = ((2.0f * h0 + h1) / hs) * d0 - (h0 / hs) * d1;
+  if (!same_sign(m, d0)) return 0.0f;
+  if (same_sign(d0, -d1) && fabsf(m) > 3.0f * fabsf(d0)) return 3.0f * d0;
   return m;
 }
 
@@ -1404,11 +1410,21 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
                          lsm_pair_stats *stats, const lsm_progress *progress, lsm_err *err) {
   if (src->count < 2)
     return lsm_fail(err, LSM_ERR_INPUT, NULL, "need at least two slices, got %zu", src->count);
-  for (size_t i = 1; i < src->count; ++i)
-    if (!(src->z[i] > src->z[i - 1]))
+  for (size_t i = 1; i < src->count; ++i) {
+    const double h = src->z[i] - src->z[i - 1];
+    if (!(h > 0.0))
       return lsm_fail(err, LSM_ERR_INPUT, NULL, "heights must increase strictly (slice %zu)", i + 1);
-  if (!(opts->pixel_size > 0.0) || !isfinite(opts->pixel_size))
-    return lsm_fail(err, LSM_ERR_USAGE, NULL, "pixel size must be positive");
+    if (!(h >= LSM_LENGTH_MIN && h <= LSM_LENGTH_MAX))
+      return lsm_fail(err, LSM_ERR_INPUT, NULL,
+                      "slices %zu and %zu are %g apart, outside %g to %g (lengths are floats)", i,
+                      i + 1, h, LSM_LENGTH_MIN, LSM_LENGTH_MAX);
+  }
+  if (!(opts->pixel_size >= LSM_LENGTH_MIN && opts->pixel_size <= LSM_LENGTH_MAX))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "pixel size %g is outside %g to %g", opts->pixel_size,
+                    LSM_LENGTH_MIN, LSM_LENGTH_MAX);
+  if (opts->dz > 0.0 && !(opts->dz >= LSM_LENGTH_MIN && opts->dz <= LSM_LENGTH_MAX))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "dz %g is outside %g to %g", opts->dz,
+                    LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   if (opts->per_iteration && opts->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a solver method, not blend");
   const double dz = opts->dz > 0.0 ? opts->dz : opts->pixel_size;

@@ -52,6 +52,15 @@
 #include "lsm_morph.h"
 #include "lsm_status.h"
 
+/* The lengths a run accepts (pixel size, dz, the height between two input
+ * slices), in any one unit: the solver holds them and the signed distances
+ * in single-precision floats, whose products under- or overflow outside this
+ * range (a pixel size of 1e36 changed the result, 1e-40 blew up the morph).
+ * Inside it the result does not depend on the unit: scaling every length by
+ * 2^64 or 2^-80 gives the same slices (tests/test_cli.sh). */
+#define LSM_LENGTH_MIN 1e-30
+#define LSM_LENGTH_MAX 1e30
+
 /* Add new items at the end of each list. */
 typedef enum lsm_method {
   LSM_METHOD_UNKNOWN = -1,

@@ -145,6 +145,25 @@ check "close heights run (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "heights 1e-7 apart: one output slice, the first input's" \
   sh -c "[ \$(ls '$TMP/out-near/slices' | wc -l) -eq 1 ] && cmp -s '$TMP/out-far/slices/00001.png' '$TMP/out-near/slices/00001.png'"
 
+# The unit of z does not matter: heights and --dz scaled by 2^64 or by 2^-80 give the same
+# slices, bit for bit (the PCHIP slopes multiplied secants and weights in floats, which under- or
+# overflowed past about 1e17 and 1e-22 pixel sizes per gap and changed the result).
+"$LSM" reconstruct "$SET" -o "$TMP/out-unit" --input outline --heights "$SET/heights.txt" --dz 5 \
+  -q --no-preview >"$TMP/o" 2>"$TMP/e"
+rc=$?
+for scale in 18446744073709551616 8.271806125530277e-25; do
+  awk -v f="$scale" '{ printf "%.17g\n", $1 * f }' "$SET/heights.txt" >"$TMP/heights-scaled.txt"
+  dz=$(awk -v f="$scale" 'BEGIN { printf "%.17g", 5 * f }')
+  [ $rc -eq 0 ] && "$LSM" reconstruct "$SET" -o "$TMP/out-scaled" --input outline \
+    --heights "$TMP/heights-scaled.txt" --dz "$dz" -q --no-preview >"$TMP/o" 2>>"$TMP/e"
+  rc=$?
+  check "heights scaled by $scale run (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+  cat "$TMP/out-unit/slices/"*.png >"$TMP/unit.bin"
+  cat "$TMP/out-scaled/slices/"*.png >"$TMP/scaled.bin" 2>/dev/null
+  check "heights and --dz scaled by $scale: the same slices" \
+    sh -c "[ \$(ls '$TMP/out-scaled/slices' | wc -l) -eq \$(ls '$TMP/out-unit/slices' | wc -l) ] && cmp -s '$TMP/unit.bin' '$TMP/scaled.bin'"
+done
+
 # --per-iteration: each pair has its own slice count, so the heights are uneven; the volume
 # files hold one spacing, and run.json and a note say so.
 "$LSM" reconstruct "$SET" -o "$TMP/out-iter" --input outline --heights "$SET/heights.txt" \

@@ -147,7 +147,7 @@ expect "200000x200000 with IDAT" 1 "huge2/1.png: image is 200000x200000" out rec
 expect "--max-pixels" 1 "good/1.png: image is 32x32 = 1024 pixels, more than the limit of 1000" out \
   reconstruct good -o out -q --max-pixels 1000
 expect "--max-voxels" 1 "more than --max-voxels 3000" out reconstruct good -o out -q --max-voxels 3000
-expect "output slice count overflow" 1 "more than --max-voxels" out reconstruct good -o out -q --dz 1e-300
+expect "output slice count overflow" 1 "more than --max-voxels" out reconstruct good -o out -q --spacing 1e29 --dz 1e-29
 # a 20000x1 strip: an aligned gap pads each axis by up to half its side, a
 # canvas of up to 40004 x 5 cells, more than 4 x --max-pixels 20000
 expect "aligned canvas of a long strip" 1 "strip/1.png: 20000x1 slices need a working canvas" out \
@@ -175,7 +175,8 @@ heights "junk" '0\n1 mm\n2\n' 'line 2: "1 mm" is not a number'
 heights "out of range" '0\n1e999\n2e999\n' 'line 2: "1e999" is out of range'
 heights "empty" '# only a comment\n\n' "no heights"
 expect "heights file missing" 1 "nothere.txt: cannot open" out reconstruct good -o out -q --heights nothere.txt
-expect "--spacing overflows the heights" 1 "height of slice 3 is not finite" out reconstruct good -o out -q --spacing 1e308
+heights "gap below the float range" '0\n1e-35\n1\n' "slices 1 and 2 are 1e-35 apart, outside 1e-30 to 1e+30"
+heights "gap above the float range" '0\n1\n1e31\n' "slices 2 and 3 are 1e+31 apart, outside 1e-30 to 1e+30"
 
 # ---- usage errors: exit 2 -------------------------------------------------------------------------------
 expect "--spacing 0" 2 "--spacing: 0 must be positive" out reconstruct good -o out --spacing 0
@@ -185,6 +186,10 @@ expect "--spacing inf" 2 "--spacing: 'inf' is not a number" out reconstruct good
 expect "--spacing junk" 2 "--spacing: '2mm' is not a number" out reconstruct good -o out --spacing 2mm
 expect "--spacing hexadecimal" 2 "--spacing: '0x10' is not a number" out reconstruct good -o out --spacing 0x10
 expect "--spacing underflows" 2 "--spacing: '5e-324' is out of range" out reconstruct good -o out --spacing 5e-324
+expect "--spacing too large for floats" 2 "--spacing: 1e308 is outside 1e-30 to 1e+30" out reconstruct good -o out --spacing 1e308
+expect "--pixel-size too large for floats" 2 "--pixel-size: 1e36 is outside 1e-30 to 1e+30" out reconstruct good -o out --pixel-size 1e36
+expect "--pixel-size too small for floats" 2 "--pixel-size: 1e-40 is outside 1e-30 to 1e+30" out reconstruct good -o out --pixel-size 1e-40
+expect "--dz too small for floats" 2 "--dz: 1e-31 is outside 1e-30 to 1e+30" out reconstruct good -o out --dz 1e-31
 expect "--pixel-size 0" 2 "--pixel-size: 0 must be positive" out reconstruct good -o out --pixel-size 0
 expect "--pixel-size -0.5" 2 "--pixel-size: -0.5 must be positive" out reconstruct good -o out --pixel-size=-0.5
 expect "--dz 0" 2 "--dz: 0 must be positive" out reconstruct good -o out --dz 0
