@@ -65,14 +65,19 @@ static void on_stop_signal(int sig) { stop_signal = sig; }
 
 /* SIGINT, SIGTERM and SIGHUP only set stop_signal; the run notices it before
  * the next input or output slice (and before publishing) and unwinds through
- * the normal error path, which removes the temporary folder.  SA_RESTART keeps
- * writes in progress from failing with EINTR; SA_RESETHAND makes a second
- * signal of the same kind take the default action at once (a stuck run can
- * still be killed).  A signal ignored when we started (SIGINT of a background
- * job of a shell without job control, nohup's SIGHUP) stays ignored.  SIGPIPE
- * is ignored: progress on stderr piped into a reader that quit is not worth
- * a half-written result. */
-static void install_stop_handlers(void) {
+ * the normal error path, which removes the temporary folder.  SA_RESETHAND
+ * makes a second signal of the same kind take the default action at once (a
+ * stuck run can still be killed).  A signal ignored when we started (SIGINT of
+ * a background job of a shell without job control, nohup's SIGHUP) stays
+ * ignored.  SIGPIPE is ignored: progress on stderr piped into a reader that
+ * quit is not worth a half-written result.
+ *
+ * While the input is read (restart 0) a signal interrupts a blocking call: a
+ * --heights FIFO whose writer never comes (`--heights <(cmd)` with a failed
+ * cmd) would otherwise hold open() through the first SIGTERM.  From the first
+ * output on (restart 1, set again unless a signal has already come) SA_RESTART
+ * keeps writes in progress from failing with EINTR. */
+static void install_stop_handlers(int restart) {
   struct sigaction ign;
   memset(&ign, 0, sizeof ign);
   ign.sa_handler = SIG_IGN;
@@ -85,7 +90,7 @@ static void install_stop_handlers(void) {
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_stop_signal;
     sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESTART | SA_RESETHAND;
+    sa.sa_flags = (restart ? SA_RESTART : 0) | SA_RESETHAND;
     sigaction(sigs[k], &sa, NULL);
   }
 }
@@ -732,6 +737,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
     stats = calloc(src.count, sizeof *stats);
     if (!stats) st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the run");
   }
+  if (st == LSM_OK && !stop_signal) install_stop_handlers(1);
   if (st == LSM_OK) {
     lsm_slice_source source = {&src, src.count, z, png_load, png_name};
     st = lsm_stack_run(&source, width, height, &cli->stack, NULL, stats, NULL, err);
@@ -795,6 +801,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     sink.mask = malloc((size_t)width * (size_t)height);
     if (!stats || !sink.mask) st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the run");
   }
+  if (st == LSM_OK && !stop_signal) install_stop_handlers(1);
   if (st == LSM_OK) st = make_temp_dir(cli->out_dir, tmp, sizeof tmp, err);
   if (st == LSM_OK) {
     char path[4200];
@@ -1041,7 +1048,7 @@ static int run(int argc, char **argv, const lsm_mpi *mpi) {
     printf("lsmorph %s\n", LSM_VERSION);
     return 0;
   case LSM_CMD_RECONSTRUCT:
-    install_stop_handlers();
+    install_stop_handlers(0);
     st = reconstruct(argc, argv, &cli, mpi, &err);
     break;
   case LSM_CMD_DEVICES:

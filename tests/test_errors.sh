@@ -400,6 +400,31 @@ sum_long=$(fingerprint long-out)
 interrupt INT 130
 interrupt TERM 143
 
+# ---- interruption while waiting for the input ----------------------------------------------
+# --heights on a FIFO that nobody writes (`--heights <(cmd)` whose cmd failed): open() blocks.
+# The first SIGTERM must end it (it used to be restarted, and only a second signal killed it).
+rm -f heights.fifo
+if mkfifo heights.fifo 2>/dev/null; then
+  "$LSM" reconstruct good -o fifo-out -q --heights heights.fifo >/dev/null 2>"$TMP/stderr-fifo" &
+  pid=$!
+  sleep 1
+  kill -s TERM $pid 2>/dev/null
+  i=0
+  while kill -0 $pid 2>/dev/null && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+  if kill -0 $pid 2>/dev/null; then
+    bad "FIFO heights: still waiting 5 s after SIGTERM"
+    kill -s KILL $pid 2>/dev/null
+  else
+    ok
+  fi
+  wait $pid 2>/dev/null
+  rc=$?
+  if [ $rc -eq 143 ]; then ok; else bad "FIFO heights: exit $rc, expected 143 ($(cat "$TMP/stderr-fifo"))"; fi
+  if grep -q -F "lsmorph: error: fifo-out: interrupted by SIGTERM" "$TMP/stderr-fifo"; then ok; else bad "FIFO heights: message $(cat "$TMP/stderr-fifo")"; fi
+  if [ -e fifo-out ]; then bad "FIFO heights: fifo-out was created"; else ok; fi
+  rm -f heights.fifo
+fi
+
 # ---- interruption inside one long gap --------------------------------------------------------
 # One gap of 1024x1024 (a disc into a distant ellipse, RK3, reinitialisation
 # every other step): about 20 s on one thread before its first slice, so a
