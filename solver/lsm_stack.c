@@ -156,16 +156,19 @@ static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy
 
 /* ---- monotone cubic (PCHIP) ------------------------------------------------------------- */
 
+/* Both strictly positive or both strictly negative.  Signs are compared, not
+ * multiplied: with h in physical z units and d = dphi / h, products such as
+ * d0 d1 under- or overflowed a float where a gap is more than about 1e17
+ * pixel sizes long or less than 1e-22 (the result depended on the unit). */
+static inline int same_sign(float a, float b) {
+  return (a > 0.0f && b > 0.0f) || (a < 0.0f && b < 0.0f);
+}
+
 /* Fritsch–Carlson slope at a knot between intervals of lengths h0, h1 with
  * secants d0, d1 (the weighted harmonic mean of Fritsch & Butland, as in
  * Moler's pchip): zero at a local extremum, so the Hermite cubic stays within
- * the range of its two knots — no overshoot. */
-static inline int same_sign(float a, float b) { return (a > 0.0f && b > 0.0f) || (a < 0.0f && b < 0.0f); }
-
-/* The weights are divided by h0 + h1 and the signs compared, not multiplied:
- * h in physical z units and d = dphi / h, the products d0 d1 and w / d
- * under- or overflowed a float where a gap is more than about 1e17 pixel
- * sizes long or less than 1e-22 (the result depended on the units). */
+ * the range of its two knots — no overshoot.  The weights are divided by
+ * h0 + h1 so that w / d stays within a float's range too. */
 static inline float pchip_slope(float h0, float h1, float d0, float d1) {
   if (!same_sign(d0, d1)) return 0.0f;
   const float hs = h0 + h1, w1 = (2.0f * h1 + h0) / hs, w2 = (h1 + 2.0f * h0) / hs;
