@@ -220,7 +220,7 @@ static lsm_status parse_double(const char *opt, const char *text, double *out, i
 static lsm_status parse_length(const char *opt, const char *text, double *out, lsm_err *err) {
   double v = 0.0;
   LSM_TRY(parse_double(opt, text, &v, 1, err));
-  if (!(v >= LSM_LENGTH_MIN && v <= LSM_LENGTH_MAX))
+  if (!lsm_length_in_range(v))
     return lsm_fail(err, LSM_ERR_USAGE, NULL,
                     "%s: %s is outside %g to %g (lengths are held as floats; choose a unit that "
                     "brings it into range)",

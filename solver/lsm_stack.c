@@ -1417,15 +1417,15 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
     const double h = src->z[i] - src->z[i - 1];
     if (!(h > 0.0))
       return lsm_fail(err, LSM_ERR_INPUT, NULL, "heights must increase strictly (slice %zu)", i + 1);
-    if (!(h >= LSM_LENGTH_MIN && h <= LSM_LENGTH_MAX))
+    if (!lsm_length_in_range(h))
       return lsm_fail(err, LSM_ERR_INPUT, NULL,
                       "slices %zu and %zu are %g apart, outside %g to %g (lengths are floats)", i,
                       i + 1, h, LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   }
-  if (!(opts->pixel_size >= LSM_LENGTH_MIN && opts->pixel_size <= LSM_LENGTH_MAX))
+  if (!lsm_length_in_range(opts->pixel_size))
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "pixel size %g is outside %g to %g", opts->pixel_size,
                     LSM_LENGTH_MIN, LSM_LENGTH_MAX);
-  if (opts->dz > 0.0 && !(opts->dz >= LSM_LENGTH_MIN && opts->dz <= LSM_LENGTH_MAX))
+  if (opts->dz > 0.0 && !lsm_length_in_range(opts->dz))
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "dz %g is outside %g to %g", opts->dz,
                     LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   if (opts->per_iteration && opts->method == LSM_METHOD_BLEND)

@@ -61,6 +61,11 @@
 #define LSM_LENGTH_MIN 1e-30
 #define LSM_LENGTH_MAX 1e30
 
+/* Whether a length lies in that range (false for NaN). */
+static inline int lsm_length_in_range(double v) {
+  return v >= LSM_LENGTH_MIN && v <= LSM_LENGTH_MAX;
+}
+
 /* Add new items at the end of each list. */
 typedef enum lsm_method {
   LSM_METHOD_UNKNOWN = -1,

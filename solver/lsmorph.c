@@ -615,7 +615,7 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
     if (k > 0 && !(z[k] > z[k - 1]))
       return lsm_fail(err, LSM_ERR_INPUT, cli->heights_file ? cli->heights_file : cli->slice_dir,
                       "heights of slices %zu and %zu are not increasing", k, k + 1);
-    if (k > 0 && !(z[k] - z[k - 1] >= LSM_LENGTH_MIN && z[k] - z[k - 1] <= LSM_LENGTH_MAX))
+    if (k > 0 && !lsm_length_in_range(z[k] - z[k - 1]))
       return lsm_fail(err, LSM_ERR_INPUT, cli->heights_file ? cli->heights_file : cli->slice_dir,
                       "slices %zu and %zu are %g apart, outside %g to %g (lengths are held as "
                       "floats; choose a unit that brings it into range)",
