@@ -235,8 +235,8 @@ double lsm_end_depth(const lsm_grid *phi) {
   return fmax(-(double)lsm_grid_min(phi), 0.5 * phi->dx);
 }
 
-double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma) {
-  if (sigma >= 0.5) return R * (1.0 + 1e-6) + 1e-6;
+double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma, double dx) {
+  if (sigma >= 0.5) return R * (1.0 + 1e-6) + 1e-6 * dx;
   if (profile == LSM_END_BLEND) return R * sigma / (1.0 - sigma);
   return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
 }
@@ -321,7 +321,7 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
 void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
   const lsm_grid *full = e->full;
   if (!lsm_end_profile_is_trend(e->profile)) {
-    const float depth = (float)lsm_end_cap_depth(e->profile, e->R, sigma);
+    const float depth = (float)lsm_end_cap_depth(e->profile, e->R, sigma, full->dx);
     for (int j = 0; j < work->ny; ++j)
       for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + depth;
     return;

@@ -147,8 +147,9 @@ double lsm_end_depth(const lsm_grid *phi);
 
 /* Erosion depth at fraction sigma of the end gap with the linear profile, R
  * the section's largest depth: R (1 - sqrt(1 - 2 sigma)) for the paraboloid,
- * R sigma / (1 - sigma) for the blend; past R from sigma = 1/2 (nothing left). */
-double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma);
+ * R sigma / (1 - sigma) for the blend; past R from sigma = 1/2 (nothing left:
+ * R by a millionth of R and of the cell size dx). */
+double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma, double dx);
 
 /* Whether profile is one of the cubic (trend) profiles, which read N and M. */
 int lsm_end_profile_is_trend(lsm_end_profile profile);

@@ -10,8 +10,9 @@ lsm_status lsm_mask_create(int width, int height, lsm_mask *out, lsm_err *err) {
   if (width <= 0 || height <= 0)
     return lsm_fail(err, LSM_ERR_INPUT, NULL, "mask size %dx%d is not positive", width, height);
   size_t n;
-  if (!lsm_size_mul((size_t)width, (size_t)height, &n))
-    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "mask size %dx%d overflows", width, height);
+  if (!lsm_size_mul((size_t)width, (size_t)height, &n) || n > (size_t)LSM_GRID_CELLS_MAX)
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "a %dx%d mask has more than %lld cells", width,
+                    height, (long long)LSM_GRID_CELLS_MAX);
   out->pixels = calloc(n, 1);
   if (!out->pixels) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a %dx%d mask", width, height);
   out->width = width;
@@ -63,6 +64,10 @@ static lsm_status grid_alloc(int nx, int ny, float dx, float dy, int zero, lsm_g
   size_t rows = (size_t)ny + 2u * LSM_GHOST, cols = (size_t)nx + 2u * LSM_GHOST, n;
   if (!lsm_size_mul(rows, cols, &n))
     return lsm_fail(err, LSM_ERR_LIMIT, NULL, "grid size %dx%d overflows", nx, ny);
+  /* cell indices are 32-bit where cells are labelled (lsm_grid_label_components) */
+  if ((uint64_t)nx * (uint64_t)ny > LSM_GRID_CELLS_MAX)
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "a %dx%d grid has more than %lld cells", nx, ny,
+                    (long long)LSM_GRID_CELLS_MAX);
   lsm_grid *g = malloc(sizeof *g);
   if (!g) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a grid");
   g->base = lsm_alloc(n, sizeof(float), err, "grid");

@@ -19,6 +19,10 @@
 /* Roe-Fix's widened sets reach 3 cells away and differences one more. */
 #define LSM_GHOST 4
 
+/* The most cells (interior) of a grid or mask: connected parts are labelled
+ * with 32-bit cell indices.  Creating a larger one fails with LSM_ERR_LIMIT. */
+#define LSM_GRID_CELLS_MAX INT32_MAX
+
 typedef struct lsm_mask {
   int width, height;
   uint8_t *pixels; /* width*height, 1 inside, 0 outside */

@@ -216,7 +216,7 @@ lsm_status lsm_sdf_from_mask(const lsm_mask *mask, lsm_grid *phi, lsm_err *err) 
   const size_t inside = lsm_mask_count(mask);
   if (inside == 0 || inside == npix) {
     /* No boundary: everything is far outside (empty) or far inside (full). */
-    lsm_grid_fill(phi, inside == 0 ? LSM_SDF_FAR : -LSM_SDF_FAR);
+    lsm_grid_fill(phi, (inside == 0 ? LSM_SDF_FAR : -LSM_SDF_FAR) * phi->dx);
     return LSM_OK;
   }
 
@@ -428,7 +428,7 @@ lsm_status lsm_sdf_from_outline(const lsm_mask *outline, lsm_grid *phi, lsm_err 
   const int W = outline->width, H = outline->height;
   const size_t npix = (size_t)W * (size_t)H;
   if (lsm_mask_count(outline) == 0) {
-    lsm_grid_fill(phi, LSM_SDF_FAR);
+    lsm_grid_fill(phi, LSM_SDF_FAR * phi->dx);
     return LSM_OK;
   }
 

@@ -37,13 +37,14 @@ lsm_status lsm_outline_fill(const lsm_mask *outline, lsm_mask *filled, lsm_err *
 
 /* Signed distance of a mask (see above) into the interior of phi, which must
  * be mask->width x mask->height (the grid's dx, dy are the pixel size).  An
- * empty mask gives +LSM_SDF_FAR everywhere; a full mask -LSM_SDF_FAR. */
+ * empty mask gives +LSM_SDF_FAR dx everywhere; a full mask -LSM_SDF_FAR dx. */
 lsm_status lsm_sdf_from_mask(const lsm_mask *mask, lsm_grid *phi, lsm_err *err);
 
 /* Signed distance of an outline slice (see above) into phi. */
 lsm_status lsm_sdf_from_outline(const lsm_mask *outline, lsm_grid *phi, lsm_err *err);
 
-/* |phi| assigned to cells when a slice has no boundary (empty or full). */
+/* |phi| assigned to cells when a slice has no boundary (empty or full), in
+ * cells: the field holds LSM_SDF_FAR times the grid's dx. */
 #define LSM_SDF_FAR 1.0e6f
 
 /* Centroid (cx, cy) in pixel coordinates (column, row; pixel centres at

@@ -1134,12 +1134,46 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
   return st;
 }
 
+/* The regular output grid of the default mode: heights z0 + k dz.  Output
+ * height k is input slice i when its offset k dz from z0 lies within eps of
+ * the input's offset z_i - z0: a millionth of dz, or of the closest pair of
+ * input heights where they are closer still (a gap thinner than eps would
+ * otherwise give its first output height to the wrong slice).  Offsets, not
+ * heights, are compared, so that a large z0 costs no precision, and the same
+ * two tests below decide the slice count, each gap's share and which
+ * heights are input slices. */
+typedef struct output_grid {
+  double z0, dz, eps;
+} output_grid;
+
+static output_grid output_grid_of(const double *z, size_t count, double dz) {
+  double min_gap = dz;
+  for (size_t i = 0; i + 1 < count; ++i) min_gap = fmin(min_gap, z[i + 1] - z[i]);
+  return (output_grid){count ? z[0] : 0.0, dz, 1e-6 * min_gap};
+}
+
+/* Output height k lies below input height z by more than eps. */
+static int grid_below(const output_grid *g, size_t k, double z) {
+  return (double)k * g->dz < (z - g->z0) - g->eps;
+}
+
+/* Output height k lies no higher than eps above input height z. */
+static int grid_not_above(const output_grid *g, size_t k, double z) {
+  return (double)k * g->dz <= (z - g->z0) + g->eps;
+}
+
 size_t lsm_stack_output_count(const double *z, size_t count, double dz) {
   if (count == 0 || !(dz > 0.0)) return 0;
-  const double n = floor((z[count - 1] - z[0]) / dz + 1e-6);
-  if (!(n >= 0.0)) return 0;
-  if (n >= (double)SIZE_MAX / 2) return SIZE_MAX / 2; /* callers refuse such runs */
-  return (size_t)n + 1;
+  const output_grid g = output_grid_of(z, count, dz);
+  const double span = z[count - 1] - z[0];
+  const double n0 = floor((span + g.eps) / dz);
+  if (!(n0 >= 0.0)) return 0;
+  if (n0 >= (double)LSM_OUTPUT_COUNT_MAX / 2) return LSM_OUTPUT_COUNT_MAX; /* callers refuse such runs */
+  /* the division rounds: settle n by the test the gaps use */
+  size_t n = (size_t)n0;
+  while (grid_not_above(&g, n + 1, z[count - 1])) ++n;
+  while (n > 0 && !grid_not_above(&g, n, z[count - 1])) --n;
+  return n + 1;
 }
 
 /* ---- the gaps of the default mode, one task each ------------------------------------------ */
@@ -1202,8 +1236,8 @@ typedef struct gap_plan {
  * slices (A, B, and the neighbours for the cubic), emits the input slice on
  * z_A if it lies on the grid, then the intermediate slices.  `r` is this
  * task's own run (its sink, output buffer and scratch). */
-static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double z0, double dz,
-                           double eps, lsm_pair_stats *ps, lsm_err *err) {
+static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, const output_grid *g,
+                           lsm_pair_stats *ps, lsm_err *err) {
   const lsm_slice_source *src = r->src;
   const lsm_stack_opts *o = r->opts;
   const int cubic = o->interp == LSM_INTERP_CUBIC;
@@ -1243,13 +1277,15 @@ static lsm_status gap_task(stack_run *r, size_t i, const gap_plan *plan, double 
   }
   size_t n = 0;
   for (size_t q = plan->first; st == LSM_OK && q < plan->last; ++q) {
-    const double z = z0 + (double)q * dz;
-    if (fabs(z - za) <= eps) {
+    /* the plan puts q at most eps below z_A: within eps of it, q is A */
+    const double z = g->z0 + (double)q * g->dz;
+    const double f = ((double)q * g->dz - (za - g->z0)) / (zb - za);
+    if (grid_not_above(g, q, za) || !(f > 0.0)) {
       st = emit_input(r, &s[1], i, z, err);
       continue;
     }
     zs[n] = z;
-    fs[n] = (z - za) / (zb - za);
+    fs[n] = f;
     ++n;
   }
   if (st == LSM_OK) {
@@ -1325,8 +1361,8 @@ static lsm_status run_per_iteration(stack_run *r, lsm_pair_stats *stats, lsm_err
 /* Computes gap i into res (its slices, statistics or error) with its own
  * buffers, on `threads` threads: one task of the gap-parallel and of the
  * distributed runs. */
-static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, double z0,
-                        double dz, double eps, int threads, lsm_gap_result *res) {
+static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan,
+                        const output_grid *g, int threads, lsm_gap_result *res) {
   memset(res, 0, sizeof *res);
   lsm_err e;
   lsm_err_clear(&e);
@@ -1356,7 +1392,7 @@ static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, d
     slice_free(&a);
     slice_free(&b);
   } else if (st == LSM_OK) {
-    st = gap_task(&task, i, plan, z0, dz, eps, &res->stats, &e);
+    st = gap_task(&task, i, plan, g, &res->stats, &e);
   }
   res->status = st;
   if (st != LSM_OK) snprintf(res->msg, sizeof res->msg, "%s", e.msg[0] ? e.msg : lsm_status_name(st));
@@ -1365,8 +1401,8 @@ static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan, d
 }
 
 /* Gap i is computed by rank i % size; rank 0 writes everything, in order. */
-static lsm_status run_distributed(stack_run *r, const gap_plan *plan, double z0, double dz,
-                                  double eps, lsm_pair_stats *stats, lsm_err *err) {
+static lsm_status run_distributed(stack_run *r, const gap_plan *plan, const output_grid *g,
+                                  lsm_pair_stats *stats, lsm_err *err) {
   const lsm_gap_transport *t = r->opts->transport;
   const size_t gaps = r->src->count - 1;
   lsm_status st = LSM_OK;
@@ -1381,7 +1417,7 @@ static lsm_status run_distributed(stack_run *r, const gap_plan *plan, double z0,
     lsm_gap_result res;
     memset(&res, 0, sizeof res);
     if (owner == t->rank) {
-      compute_gap(r, i, plan ? &plan[i] : NULL, z0, dz, eps, 0, &res);
+      compute_gap(r, i, plan ? &plan[i] : NULL, g, 0, &res);
       res.stats.rank = t->rank;
       if (t->rank != 0) {
         st = t->send(t->ctx, i, &res, err);
@@ -1450,7 +1486,7 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
                                   (float)opts->pixel_size, &r.image_phi, err);
   const int distributed = opts->transport && opts->transport->size > 1;
   if (st == LSM_OK && opts->per_iteration) {
-    st = distributed ? run_distributed(&r, NULL, 0.0, 0.0, 0.0, stats, err)
+    st = distributed ? run_distributed(&r, NULL, NULL, stats, err)
                      : run_per_iteration(&r, stats, err);
     lsm_grid_destroy(&r.image_phi);
     free(r.out);
@@ -1460,19 +1496,13 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
   /* Default mode: the regular output grid, split by gap. */
   r.total = lsm_stack_output_count(src->z, src->count, dz);
   const size_t K = r.total;
-  /* an output height within eps of an input height is that input slice: a
-   * millionth of the output spacing, or of the closest pair of input heights
-   * where they are closer still (a gap thinner than eps would otherwise give
-   * its first output height to the wrong slice) */
-  double min_gap = dz;
-  for (size_t i = 0; i + 1 < src->count; ++i) min_gap = fmin(min_gap, src->z[i + 1] - src->z[i]);
-  const double z0 = src->z[0], eps = 1e-6 * min_gap;
+  const output_grid grid = output_grid_of(src->z, src->count, dz);
   gap_plan *plan = st == LSM_OK ? lsm_alloc(gaps, sizeof *plan, err, "gap plan") : NULL;
   if (st == LSM_OK && !plan) st = err ? err->status : LSM_ERR_NOMEM;
   size_t k = 0;
   for (size_t i = 0; st == LSM_OK && i < gaps; ++i) {
     plan[i].first = k;
-    while (k < K && z0 + (double)k * dz < src->z[i + 1] - eps) ++k;
+    while (k < K && grid_below(&grid, k, src->z[i + 1])) ++k;
     plan[i].last = k;
   }
   size_t most_slices = 0;
@@ -1482,10 +1512,10 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
       st == LSM_OK && !distributed ? gap_workers(opts, width, height, gaps, most_slices) : 1;
   r.gap_workers = workers;
   if (st == LSM_OK && distributed) {
-    st = run_distributed(&r, plan, z0, dz, eps, stats, err);
+    st = run_distributed(&r, plan, &grid, stats, err);
   } else if (st == LSM_OK && workers == 1) {
     for (size_t i = 0; st == LSM_OK && i < gaps; ++i)
-      st = gap_task(&r, i, &plan[i], z0, dz, eps, &stats[i], err);
+      st = gap_task(&r, i, &plan[i], &grid, &stats[i], err);
   } else if (st == LSM_OK) {
     /* Gaps run concurrently, each single-threaded with its own buffers; the
      * ordered block hands their slices to the sink in stack order, so the
@@ -1495,6 +1525,8 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
     lsm_status first_status = LSM_OK;
     lsm_err first_err;
     lsm_err_clear(&first_err);
+    /* the tasks copy this, not r, which the ordered block updates */
+    const stack_run proto = r;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1) ordered
     for (size_t i = 0; i < gaps; ++i) {
       lsm_gap_result buf;
@@ -1502,7 +1534,7 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
       int stop;
 #pragma omp atomic read
       stop = failed;
-      if (!stop) compute_gap(&r, i, &plan[i], z0, dz, eps, 1, &buf);
+      if (!stop) compute_gap(&proto, i, &plan[i], &grid, 1, &buf);
 #pragma omp ordered
       {
         lsm_err e;
@@ -1530,12 +1562,13 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
       if (err && err->status == LSM_OK) *err = first_err;
     }
   }
-  /* The last input slice, if it lies on the output grid (written by rank 0). */
-  if (st == LSM_OK && (!distributed || opts->transport->rank == 0) && k < K &&
-      fabs(z0 + (double)k * dz - src->z[src->count - 1]) <= eps) {
+  /* The last input slice, if it lies on the output grid (written by rank 0):
+   * K counts it when grid_not_above holds, and the plan stopped at the first
+   * k not more than eps below it. */
+  if (st == LSM_OK && (!distributed || opts->transport->rank == 0) && k < K) {
     slice last = {0};
     st = slice_load(src, src->count - 1, width, height, opts->input, &last, err);
-    if (st == LSM_OK) st = emit_input(&r, &last, src->count - 1, z0 + (double)k * dz, err);
+    if (st == LSM_OK) st = emit_input(&r, &last, src->count - 1, grid.z0 + (double)k * dz, err);
     slice_free(&last);
   }
   free(plan);

@@ -47,6 +47,7 @@
 #define LSM_STACK_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "lsm_grid.h"
 #include "lsm_morph.h"
@@ -215,7 +216,10 @@ typedef struct lsm_progress {
   void (*update)(void *ctx, size_t done, size_t total, size_t pair, size_t pairs);
 } lsm_progress;
 
-/* Number of output slices in default mode, and their first height. */
+/* Number of output slices in default mode: the heights z[0] + k dz up to
+ * the last input height (within a millionth of dz or of the closest pair of
+ * input heights).  At least LSM_OUTPUT_COUNT_MAX is returned as that. */
+#define LSM_OUTPUT_COUNT_MAX (SIZE_MAX / 2)
 size_t lsm_stack_output_count(const double *z, size_t count, double dz);
 
 /* Runs the whole stack.  stats has source->count - 1 entries.  progress may

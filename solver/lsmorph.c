@@ -643,11 +643,22 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                       hk, base_name(src->paths[0]), w, h);
     }
   }
+  /* An aligned gap pads each axis by the largest centroid shift along it (at
+   * most half the side) plus 2 cells. */
+  const uint64_t canvas = cli->stack.align == LSM_ALIGN_NONE
+                              ? (uint64_t)w * (uint64_t)h
+                              : ((uint64_t)w + 2 * ((uint64_t)w / 2 + 2)) *
+                                    ((uint64_t)h + 2 * ((uint64_t)h / 2 + 2));
+  if (canvas > (uint64_t)LSM_GRID_CELLS_MAX)
+    return lsm_fail(err, LSM_ERR_LIMIT, src->paths[0],
+                    "%dx%d slices need a working grid of up to %llu cells%s, more than the %lld "
+                    "supported", w, h, (unsigned long long)canvas,
+                    cli->stack.align != LSM_ALIGN_NONE &&
+                            (uint64_t)w * (uint64_t)h <= (uint64_t)LSM_GRID_CELLS_MAX
+                        ? " (use --align none)"
+                        : "",
+                    (long long)LSM_GRID_CELLS_MAX);
   if (cli->stack.align != LSM_ALIGN_NONE) {
-    /* An aligned gap pads each axis by the largest centroid shift along it
-     * (at most half the side) plus 2 cells. */
-    const uint64_t canvas = ((uint64_t)w + 2 * ((uint64_t)w / 2 + 2)) *
-                            ((uint64_t)h + 2 * ((uint64_t)h / 2 + 2));
     if (canvas / 4 > cli->max_pixels)
       return lsm_fail(err, LSM_ERR_LIMIT, src->paths[0],
                       "%dx%d slices need a working canvas of up to %llu cells with --align %s, "
@@ -657,13 +668,15 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
   }
   if (!cli->stack.per_iteration) {
     const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
-    const double slices = floor((z[src->count - 1] - z[0]) / dz + 1e-6) + 1.0;
+    const size_t count = lsm_stack_output_count(z, src->count, dz);
+    const double slices = (double)count;
     const double voxels = slices * (double)w * (double)h;
     if (!(voxels <= (double)cli->max_voxels))
       return lsm_fail(err, LSM_ERR_LIMIT, cli->heights_file ? cli->heights_file : cli->slice_dir,
-                      "the output would have %.4g slices of %dx%d = %.4g voxels, more than "
+                      "the output would have %s%.4g slices of %dx%d = %.4g voxels, more than "
                       "--max-voxels %llu (raise --dz or --max-voxels)",
-                      slices, w, h, voxels, (unsigned long long)cli->max_voxels);
+                      count >= LSM_OUTPUT_COUNT_MAX ? "at least " : "", slices, w, h, voxels,
+                      (unsigned long long)cli->max_voxels);
   }
   *width = w;
   *height = h;

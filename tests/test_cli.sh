@@ -164,6 +164,47 @@ for scale in 18446744073709551616 8.271806125530277e-25; do
     sh -c "[ \$(ls '$TMP/out-scaled/slices' | wc -l) -eq \$(ls '$TMP/out-unit/slices' | wc -l) ] && cmp -s '$TMP/unit.bin' '$TMP/scaled.bin'"
 done
 
+# The signed distance itself is in the unit too: every length scaled by 2^-30 or 2^30 scales
+# every volume value by the same factor exactly, the empty slice (filled with 1e6 pixels, not 1e6
+# units) and the end cap past mid-gap (a millionth of a pixel beyond the depth) included.
+mkdir -p "$TMP/unit-end"
+printf 'gray8 %s 32 8\ngray8 %s 32 6\nempty %s 32\n' \
+  "$TMP/unit-end/1.png" "$TMP/unit-end/2.png" "$TMP/unit-end/3.png" | /usr/bin/python3 tests/make_png.py -
+for interp in linear cubic; do
+  "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-unit-px" --spacing 8 --interp $interp \
+    --format raw -q --no-preview >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  for e in -30 30; do
+    [ $rc -eq 0 ] && "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-unit-scaled" \
+      --spacing "$(awk -v e=$e 'BEGIN { printf "%.17g", 8 * 2 ^ e }')" \
+      --pixel-size "$(awk -v e=$e 'BEGIN { printf "%.17g", 2 ^ e }')" --interp $interp \
+      --format raw -q --no-preview >"$TMP/o" 2>>"$TMP/e"
+    rc=$?
+    check "--interp $interp, pixel size 2^$e runs (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+    check "--interp $interp: all lengths times 2^$e give the volume times 2^$e" /usr/bin/python3 -c "
+import array, sys
+x = array.array('f', open('$TMP/out-unit-px/volume.raw', 'rb').read())
+y = array.array('f', open('$TMP/out-unit-scaled/volume.raw', 'rb').read())
+sys.exit(not (len(x) == len(y) > 0 and all(u * 2.0 ** $e == v for u, v in zip(x, y))))"
+  done
+done
+
+# An output height a rounding error away from an input height far from zero is that input
+# slice: the grid tests compare offsets from the first height, not heights (a height of 7e7
+# with --dz 0.01 gave a gap's last fraction as -7e-7 and ran the morph to --max-iter).
+printf '74446402.1675301\n74446402.20753011\n74446402.24753012\n74446402.26753011\n' \
+  >"$TMP/far-heights.txt"
+mkdir -p "$TMP/far"
+printf 'gray8 %s 32 8\ngray8 %s 32 5\ngray8 %s 32 9\ngray8 %s 32 7\n' "$TMP/far/1.png" \
+  "$TMP/far/2.png" "$TMP/far/3.png" "$TMP/far/4.png" | /usr/bin/python3 tests/make_png.py -
+"$LSM" reconstruct "$TMP/far" -o "$TMP/out-far-z" --heights "$TMP/far-heights.txt" --dz 0.01 \
+  --no-preview --max-iter 2000 >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "heights near 7e7, --dz 0.01 runs (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "heights near 7e7: 11 slices, the last input's included" \
+  sh -c "[ \$(ls '$TMP/out-far-z/slices' | wc -l) -eq 11 ]"
+check "heights near 7e7: no gap stops at --max-iter" sh -c "! grep -q 'max-iter' '$TMP/e'"
+
 # --per-iteration: each pair has its own slice count, so the heights are uneven; the volume
 # files hold one spacing, and run.json and a note say so.
 "$LSM" reconstruct "$SET" -o "$TMP/out-iter" --input outline --heights "$SET/heights.txt" \

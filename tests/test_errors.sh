@@ -144,6 +144,9 @@ t1=$(date +%s)
 if [ $((t1 - t0)) -le 2 ]; then ok; else bad "200000x200000 header took $((t1 - t0)) s to refuse"; fi
 # the same header followed by a short IDAT and IEND
 expect "200000x200000 with IDAT" 1 "huge2/1.png: image is 200000x200000" out reconstruct huge2 -o out -q
+# past --max-pixels, the working grid's cells are counted with 32-bit indices: refused
+expect "grid over 2^31 cells" 1 "huge2/1.png: 200000x200000 slices need a working grid of up to 40000000000 cells, more than the 2147483647 supported" \
+  out reconstruct huge2 -o out -q --max-pixels 40000000000 --align none
 expect "--max-pixels" 1 "good/1.png: image is 32x32 = 1024 pixels, more than the limit of 1000" out \
   reconstruct good -o out -q --max-pixels 1000
 expect "--max-voxels" 1 "more than --max-voxels 3000" out reconstruct good -o out -q --max-voxels 3000

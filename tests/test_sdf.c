@@ -283,7 +283,26 @@ static void test_sdf_empty_full_and_errors(void **state) {
   assert_int_equal(lsm_sdf_from_outline(&m, wrong, &err), LSM_ERR_INTERNAL);
   lsm_grid_destroy(&wrong);
   lsm_grid_destroy(&phi);
+
+  /* far is counted in cells: with 1/1024 unit cells the field is 1024 times smaller */
+  phi = new_grid(7, 5, 0.0009765625f, 0.0009765625f);
+  assert_int_equal(lsm_sdf_from_mask(&m, phi, &err), LSM_OK);
+  assert_close(lsm_grid_max(phi), -LSM_SDF_FAR / 1024, 0);
+  memset(m.pixels, 0, 35);
+  assert_int_equal(lsm_sdf_from_mask(&m, phi, &err), LSM_OK);
+  assert_close(lsm_grid_min(phi), LSM_SDF_FAR / 1024, 0);
+  assert_int_equal(lsm_sdf_from_outline(&m, phi, &err), LSM_OK);
+  assert_close(lsm_grid_min(phi), LSM_SDF_FAR / 1024, 0);
+  lsm_grid_destroy(&phi);
   lsm_mask_free(&m);
+
+  /* cells are labelled with 32-bit indices: larger grids and masks are refused, unallocated */
+  lsm_grid *big = NULL;
+  assert_int_equal(lsm_grid_create(46341, 46341, 1.0f, 1.0f, &big, &err), LSM_ERR_LIMIT);
+  assert_null(big);
+  lsm_mask bigm;
+  assert_int_equal(lsm_mask_create(46341, 46341, &bigm, &err), LSM_ERR_LIMIT);
+  assert_null(bigm.pixels);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -565,8 +584,8 @@ static void test_sdf_outline_nested_and_empty(void **state) {
 
   memset(m.pixels, 0, 45 * 45);
   assert_int_equal(lsm_sdf_from_outline(&m, phi, &err), LSM_OK);
-  assert_close(lsm_grid_min(phi), LSM_SDF_FAR, 0);
-  assert_close(LSM_AT(phi, -4, 48), LSM_SDF_FAR, 0);
+  assert_close(lsm_grid_min(phi), LSM_SDF_FAR * phi->dx, 0);
+  assert_close(LSM_AT(phi, -4, 48), LSM_SDF_FAR * phi->dx, 0);
   lsm_grid_destroy(&phi);
   lsm_mask_free(&m);
 }

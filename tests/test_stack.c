@@ -375,6 +375,34 @@ static void test_output_heights(void **state) {
   sink_free(&r.sink);
 }
 
+/* The slice count, each gap's share of the grid and the input heights on it
+ * are decided by the same two tests: a last height off the grid by more than
+ * the tolerance (a millionth of the closest pair of heights, 0.25 here) is
+ * not counted, and one within it is counted and is that input slice.  (The
+ * count used a millionth of dz and the gaps the smaller tolerance: 11 slices
+ * counted, 10 written, the last input slice lost.) */
+static void test_output_count_matches_gaps(void **state) {
+  (void)state;
+  const slice_def defs[3] = {{1, {disc(C, C, 30)}}, {1, {disc(C, C, 28)}}, {1, {disc(C, C, 10)}}};
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.method = LSM_METHOD_BLEND;
+  o.dz = 1;
+  run r;
+  const double off[3] = {0, 0.25, 9.9999995};
+  assert_int_equal(lsm_stack_output_count(off, 3, 1.0), 10);
+  assert_int_equal(run_stack(&r, W, H, 0, defs, off, 3, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 10);
+  assert_close(r.sink.s[9].z, 9.0, 1e-12);
+  sink_free(&r.sink);
+  const double on[3] = {0, 0.25, 9.99999999};
+  assert_int_equal(lsm_stack_output_count(on, 3, 1.0), 11);
+  assert_int_equal(run_stack(&r, W, H, 0, defs, on, 3, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 11);
+  check_exact_input(&r, 10, 2);
+  sink_free(&r.sink);
+}
+
 /* ------------------------------------------------------------------------ */
 /* topology                                                                  */
 
@@ -987,6 +1015,7 @@ int main(void) {
       cmocka_unit_test(test_cone_nonuniform),
       cmocka_unit_test(test_cone_blend),
       cmocka_unit_test(test_output_heights),
+      cmocka_unit_test(test_output_count_matches_gaps),
       cmocka_unit_test(test_merge_split),
       cmocka_unit_test(test_thin_outside),
       cmocka_unit_test(test_branch_recedes),
