@@ -40,10 +40,12 @@ struct lsm_mesh {
 
 /* ---- building planes ----------------------------------------------------------------------- */
 
-/* A pad sample: the mirror of the boundary sample, strictly positive. */
-static inline float pad_value(float v) {
+/* A pad sample: the mirror of the boundary sample, strictly positive: at
+ * least a millionth of a pixel. */
+static inline float pad_value(const lsm_mesh *m, float v) {
+  const float least = (float)(1e-6 * m->sx);
   float a = fabsf(v);
-  if (!(a >= 1e-6f)) a = 1e-6f; /* also catches NaN */
+  if (!(a >= least)) a = least; /* also catches NaN */
   return a;
 }
 
@@ -57,13 +59,13 @@ static void build_slice_plane(lsm_mesh *m, float *dst, const float *phi) {
     for (int i = 0; i < w; ++i) {
       int si = i - 1 < 0 ? 0 : i - 1 >= nx ? nx - 1 : i - 1;
       float v = row[si];
-      out[i] = (border_row || i == 0 || i == w - 1) ? pad_value(v) : v;
+      out[i] = (border_row || i == 0 || i == w - 1) ? pad_value(m, v) : v;
     }
   }
 }
 
 static void build_pad_plane(lsm_mesh *m, float *dst, const float *src) {
-  for (size_t k = 0; k < m->plane_n; ++k) dst[k] = pad_value(src[k]);
+  for (size_t k = 0; k < m->plane_n; ++k) dst[k] = pad_value(m, src[k]);
 }
 
 /* ---- growing the mesh ---------------------------------------------------------------------- */

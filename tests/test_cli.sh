@@ -165,27 +165,43 @@ for scale in 18446744073709551616 8.271806125530277e-25; do
 done
 
 # The signed distance itself is in the unit too: every length scaled by 2^-30 or 2^30 scales
-# every volume value by the same factor exactly, the empty slice (filled with 1e6 pixels, not 1e6
-# units) and the end cap past mid-gap (a millionth of a pixel beyond the depth) included.
+# every volume value and mesh vertex by the same factor exactly (normals and faces unchanged), the
+# empty slice (filled with 1e6 pixels, not 1e6 units), the end cap past mid-gap (a millionth of a
+# pixel beyond the depth) and the mesh's closing pad (at least a millionth of a pixel) included.
 mkdir -p "$TMP/unit-end"
 printf 'gray8 %s 32 8\ngray8 %s 32 6\nempty %s 32\n' \
   "$TMP/unit-end/1.png" "$TMP/unit-end/2.png" "$TMP/unit-end/3.png" | /usr/bin/python3 tests/make_png.py -
+cat >"$TMP/scaled.py" <<'PY'
+import array, sys
+def ply(path):
+    b = open(path, "rb").read()
+    i = b.index(b"end_header\n") + 11
+    head = b[:i].decode()
+    nv = int(head.split("element vertex ")[1].split()[0])
+    nprop = head.split("element vertex")[1].split("element face")[0].count("property")
+    return array.array("f", b[i:i + 4 * nv * nprop]), nprop, b[i + 4 * nv * nprop:]
+a, b, f = sys.argv[1], sys.argv[2], 2.0 ** int(sys.argv[3])
+x = array.array("f", open(a + "/volume.raw", "rb").read())
+y = array.array("f", open(b + "/volume.raw", "rb").read())
+ok = len(x) == len(y) > 0 and all(u * f == v for u, v in zip(x, y))
+(p, n, fp), (q, m, fq) = ply(a + "/surface.ply"), ply(b + "/surface.ply")
+ok = ok and n == m == 6 and len(p) == len(q) > 0 and fp == fq and all(
+    (u * f if k % 6 < 3 else u) == v for k, (u, v) in enumerate(zip(p, q)))
+sys.exit(not ok)
+PY
 for interp in linear cubic; do
   "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-unit-px" --spacing 8 --interp $interp \
-    --format raw -q --no-preview >"$TMP/o" 2>"$TMP/e"
+    --format raw --mesh -q --no-preview >"$TMP/o" 2>"$TMP/e"
   rc=$?
   for e in -30 30; do
     [ $rc -eq 0 ] && "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-unit-scaled" \
       --spacing "$(awk -v e=$e 'BEGIN { printf "%.17g", 8 * 2 ^ e }')" \
       --pixel-size "$(awk -v e=$e 'BEGIN { printf "%.17g", 2 ^ e }')" --interp $interp \
-      --format raw -q --no-preview >"$TMP/o" 2>>"$TMP/e"
+      --format raw --mesh -q --no-preview >"$TMP/o" 2>>"$TMP/e"
     rc=$?
     check "--interp $interp, pixel size 2^$e runs (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
-    check "--interp $interp: all lengths times 2^$e give the volume times 2^$e" /usr/bin/python3 -c "
-import array, sys
-x = array.array('f', open('$TMP/out-unit-px/volume.raw', 'rb').read())
-y = array.array('f', open('$TMP/out-unit-scaled/volume.raw', 'rb').read())
-sys.exit(not (len(x) == len(y) > 0 and all(u * 2.0 ** $e == v for u, v in zip(x, y))))"
+    check "--interp $interp: all lengths times 2^$e give the volume and mesh times 2^$e" \
+      /usr/bin/python3 "$TMP/scaled.py" "$TMP/out-unit-px" "$TMP/out-unit-scaled" $e
   done
 done
 
