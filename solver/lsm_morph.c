@@ -162,8 +162,16 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
    * backend) or on the backend's. */
   if (host_pls) LSM_TRY(lsm_pls_correct(m->pls, m->ops->host_phi(m->state), err));
   if (m->pls_device) LSM_TRY(device_correct(m, err));
-  if (m->opts.reinit_every > 0 && m->iterations % m->opts.reinit_every == 0)
+  if (m->opts.reinit_every > 0 && m->iterations % m->opts.reinit_every == 0) {
     LSM_TRY(m->ops->reinit(m->state, m->opts.reinit_iters, err));
+    /* The step was fixed from phi_0 (the design document's rule); a
+     * reinitialised phi can move faster (steeper where it was flat, farther
+     * from phi_target where it was clamped), so the CFL bound is taken again
+     * and the step only ever shrinks. */
+    double dt_now;
+    LSM_TRY(m->ops->cfl_dt(m->state, m->opts.cfl, &dt_now, err));
+    if (dt_now < m->dt) m->dt = dt_now;
+  }
   if (m->opts.track_cp || m->iterations % 16 == 0) {
     double residual;
     LSM_TRY(m->ops->residual(m->state, &residual, err));

@@ -5,8 +5,9 @@
  * advances
  *     phi_t + (phi - phi_target) |grad phi| = 0
  * with a fixed step dt = cfl / max(|H1|/dx + |H2|/dy) computed once from
- * phi_source (METHOD.md §3.4).  The pair and stack drivers decide when to stop
- * and what to keep; the morph only steps.
+ * phi_source (METHOD.md §3.4); with reinitialisation the bound is taken again
+ * after each one, and dt shrinks if it must.  The pair and stack drivers
+ * decide when to stop and what to keep; the morph only steps.
  */
 #ifndef LSM_MORPH_H
 #define LSM_MORPH_H

@@ -4,6 +4,7 @@
 #define _XOPEN_SOURCE 700
 #include <dirent.h>
 #include <errno.h>
+#include <float.h>
 #include <ftw.h>
 #if defined(__GLIBC__) || defined(__linux__)
 #include <malloc.h>
@@ -138,32 +139,40 @@ typedef struct png_source {
 } png_source;
 
 /* Foreground rule for a stack: luminance >= 50 % (the default), unless no
- * slice has a single such pixel while some pixel is non-zero: label masks
- * stored as 0/1 would otherwise all read as empty.  Then any non-zero pixel is
- * foreground (with --invert: any zero pixel), and a note says so.  Reads
- * slices only until the first non-empty one, so a normal stack costs one or
- * two reads. */
+ * pixel of any slice reaches 50 % while the stack has both zero and non-zero
+ * pixels: label masks stored as 0/1 would otherwise all read as empty.  Then
+ * any non-zero pixel is foreground (with --invert: any zero pixel), and a
+ * note says so.  (A stack that is uniformly dark but not black, with no zero
+ * pixel, stays empty.)  Reads slices only until the first non-empty one, so a
+ * normal stack costs one or two reads. */
 static lsm_status pick_foreground(char **paths, size_t count, lsm_png_read_opts *ro, int quiet,
                                   const char *dir, lsm_err *err) {
-  for (int pass = 0; pass < 2; ++pass) {
+  int none_reach_half = 1, some_zero = 0, some_nonzero = 0;
+  for (int pass = 0; pass < 2 && none_reach_half; ++pass) {
     ro->nonzero = pass;
-    for (size_t k = 0; k < count; ++k) {
+    for (size_t k = 0; k < count && !(some_zero && some_nonzero); ++k) {
       lsm_mask m = {0, 0, NULL};
       LSM_TRY(lsm_png_read_mask(paths[k], ro, &m, err));
       const size_t inside = lsm_mask_count(&m), all = (size_t)m.width * (size_t)m.height;
       lsm_mask_free(&m);
-      /* with --invert a 0/1 mask reads as all-foreground, not as empty */
-      if (inside > 0 && inside < all) {
-        if (pass && !quiet)
-          fprintf(stderr,
-                  "lsmorph: note: %s: no pixel reaches 50 %% luminance in any slice; reading "
-                  "non-zero pixels as %s (label masks stored as 0/1)\n",
-                  dir, ro->invert ? "background" : "foreground");
-        return LSM_OK;
+      /* with --invert the mask holds the pixels below 50 %, or the zero ones */
+      const size_t fg = ro->invert ? all - inside : inside;
+      if (pass == 0 && fg > 0) { /* some pixel reaches 50 % */
+        none_reach_half = 0;
+        break;
+      }
+      if (pass == 1) {
+        some_nonzero |= fg > 0;
+        some_zero |= fg < all;
       }
     }
   }
-  ro->nonzero = 0; /* every slice really is empty (or full) */
+  ro->nonzero = none_reach_half && some_zero && some_nonzero;
+  if (ro->nonzero && !quiet)
+    fprintf(stderr,
+            "lsmorph: note: %s: no pixel reaches 50 %% luminance in any slice; reading "
+            "non-zero pixels as %s (label masks stored as 0/1)\n",
+            dir, ro->invert ? "background" : "foreground");
   return LSM_OK;
 }
 
@@ -620,6 +629,27 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                       "slices %zu and %zu are %g apart, outside %g to %g (lengths are held as "
                       "floats; choose a unit that brings it into range)",
                       k, k + 1, z[k] - z[k - 1], LSM_LENGTH_MIN, LSM_LENGTH_MAX);
+  }
+  /* Output heights are doubles: a step below a few units in the last place of
+   * the heights would repeat heights (in heights.txt, the mesh, the previews). */
+  const double z_mag = fmax(fabs(z[0]), fabs(z[src->count - 1]));
+  const double least_step = 8.0 * DBL_EPSILON * z_mag;
+  const char *heights_name = cli->heights_file ? cli->heights_file : cli->slice_dir;
+  if (cli->stack.per_iteration) {
+    for (size_t k = 0; k + 1 < src->count; ++k)
+      if ((z[k + 1] - z[k]) / ((double)cli->stack.max_iter + 1.0) < least_step)
+        return lsm_fail(err, LSM_ERR_INPUT, heights_name,
+                        "slices %zu and %zu are %g apart at heights near %g: --per-iteration's "
+                        "up to --max-iter %d steps between them would repeat heights (double "
+                        "precision); subtract an offset from the heights or lower --max-iter",
+                        k + 1, k + 2, z[k + 1] - z[k], z_mag, cli->stack.max_iter);
+  } else {
+    const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
+    if (dz < least_step)
+      return lsm_fail(err, LSM_ERR_INPUT, heights_name,
+                      "output steps of %g (%s) at heights near %g would repeat heights (double "
+                      "precision); subtract an offset from the heights or raise --dz",
+                      dz, cli->stack.dz > 0 ? "--dz" : "the pixel size", z_mag);
   }
   int w = 0, h = 0;
   for (size_t k = 0; k < src->count; ++k) {

@@ -221,6 +221,30 @@ check "heights near 7e7: 11 slices, the last input's included" \
   sh -c "[ \$(ls '$TMP/out-far-z/slices' | wc -l) -eq 11 ]"
 check "heights near 7e7: no gap stops at --max-iter" sh -c "! grep -q 'max-iter' '$TMP/e'"
 
+# --reinit-every: a reinitialised phi can move faster than phi_0 did, so the CFL bound is taken
+# again after each reinitialisation (a 51x3 bar morphing into scattered pixels on a 79x9 frame
+# blew up at iteration 191 with the step fixed from phi_0)
+mkdir -p "$TMP/reinit-cfl"
+/usr/bin/python3 - "$TMP/reinit-cfl" <<'PY'
+import struct, sys, zlib
+def png(path, rows):
+    h, w = len(rows), len(rows[0])
+    raw = b"".join(b"\0" + bytes(255 if c == "#" else 0 for c in r) for r in rows)
+    ch = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+    open(path, "wb").write(b"\x89PNG\r\n\x1a\n" + ch(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+                           + ch(b"IDAT", zlib.compress(raw)) + ch(b"IEND", b""))
+W = 79
+bar = ["." * W] * 3 + ["." * 12 + "#" * 51 + "." * 16] * 3 + ["." * W] * 3
+dots = ["." * W] * 6 + ["...." + "#" + "." * 35 + "#" + "." * 38, "." * 39 + "#" + "." * 39,
+                        "." * 38 + "#" + "." * 30 + "###" + "." * 7]
+png(sys.argv[1] + "/1.png", bar)
+png(sys.argv[1] + "/2.png", dots)
+PY
+"$LSM" reconstruct "$TMP/reinit-cfl" -o "$TMP/out-reinit-cfl" --spacing 100 --reinit-every 10 -q \
+  --no-preview >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--reinit-every 10 on a bar into scattered pixels runs (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+
 # --per-iteration: each pair has its own slice count, so the heights are uneven; the volume
 # files hold one spacing, and run.json and a note say so.
 "$LSM" reconstruct "$SET" -o "$TMP/out-iter" --input outline --heights "$SET/heights.txt" \
@@ -320,5 +344,17 @@ check "0/1 label masks: exit 0" [ $? -eq 0 ]
 check "0/1 label masks: a note says non-zero pixels are foreground" grep -q "non-zero pixels as foreground" "$TMP/lab.err"
 "$LSM" reconstruct "$TMP/lab255" -o "$TMP/out-lab255" --spacing 4 --no-preview -q
 check "0/1 label masks: same volume as 0/255 masks" cmp -s "$TMP/out-lab01/volume.nrrd" "$TMP/out-lab255/volume.nrrd"
+# also when the only non-empty 0/1 slice is full (no slice has a boundary): it read as empty
+mkdir -p "$TMP/labfull01" "$TMP/labfull255"
+printf 'label01 %s 24 0.1\nlabel01 %s 24 99\nlabel01 %s 24 0.1\nempty %s 24\ngray8 %s 24 99\nempty %s 24\n' \
+  "$TMP/labfull01/1.png" "$TMP/labfull01/2.png" "$TMP/labfull01/3.png" \
+  "$TMP/labfull255/1.png" "$TMP/labfull255/2.png" "$TMP/labfull255/3.png" |
+  /usr/bin/python3 tests/make_png.py -
+"$LSM" reconstruct "$TMP/labfull01" -o "$TMP/out-labfull01" --no-preview 2>"$TMP/lab.err"
+check "full 0/1 slice: exit 0" [ $? -eq 0 ]
+check "full 0/1 slice: a note says non-zero pixels are foreground" grep -q "non-zero pixels as foreground" "$TMP/lab.err"
+"$LSM" reconstruct "$TMP/labfull255" -o "$TMP/out-labfull255" --no-preview -q
+check "full 0/1 slice: same volume as the 0/255 stack" cmp -s "$TMP/out-labfull01/volume.nrrd" "$TMP/out-labfull255/volume.nrrd"
+check "full 0/255 slice: its output slice is full" sh -c "! cmp -s '$TMP/out-labfull255/slices/00002.png' '$TMP/out-labfull255/slices/00001.png'"
 
 finish

@@ -150,7 +150,7 @@ expect "grid over 2^31 cells" 1 "huge2/1.png: 200000x200000 slices need a workin
 expect "--max-pixels" 1 "good/1.png: image is 32x32 = 1024 pixels, more than the limit of 1000" out \
   reconstruct good -o out -q --max-pixels 1000
 expect "--max-voxels" 1 "more than --max-voxels 3000" out reconstruct good -o out -q --max-voxels 3000
-expect "output slice count overflow" 1 "more than --max-voxels" out reconstruct good -o out -q --spacing 1e29 --dz 1e-29
+expect "2e13 output slices" 1 "the output would have 2e+13 slices of 32x32" out reconstruct good -o out -q --spacing 1e10 --dz 1e-3
 # a 20000x1 strip: an aligned gap pads each axis by up to half its side, a
 # canvas of up to 40004 x 5 cells, more than 4 x --max-pixels 20000
 expect "aligned canvas of a long strip" 1 "strip/1.png: 20000x1 slices need a working canvas" out \
@@ -164,9 +164,11 @@ for args in "--max-pixels 20000 --align none" "--max-pixels 100000 --align hull"
 done
 
 # ---- heights --------------------------------------------------------------------------------------
-heights() { # heights DESC TEXT PHRASE
+heights() { # heights DESC TEXT PHRASE [OPTION...]
   printf '%b' "$2" >h.txt
-  expect "heights: $1" 1 "h.txt: $3" out reconstruct good -o out -q --heights h.txt
+  desc=$1 phrase=$3
+  shift 3
+  expect "heights: $desc" 1 "h.txt: $phrase" out reconstruct good -o out -q --heights h.txt "$@"
 }
 heights "wrong count" '0\n1\n' "2 heights for 3 slices"
 heights "too many" '0\n1\n2\n3\n' "4 heights for 3 slices"
@@ -180,6 +182,12 @@ heights "empty" '# only a comment\n\n' "no heights"
 expect "heights file missing" 1 "nothere.txt: cannot open" out reconstruct good -o out -q --heights nothere.txt
 heights "gap below the float range" '0\n1e-35\n1\n' "slices 1 and 2 are 1e-35 apart, outside 1e-30 to 1e+30"
 heights "gap above the float range" '0\n1\n1e31\n' "slices 2 and 3 are 1e+31 apart, outside 1e-30 to 1e+30"
+# output heights that double precision cannot tell apart (heights.txt repeated them)
+heights "output steps below double precision" '1e10\n1.00000001e10\n1.00000002e10\n' \
+  "output steps of 1e-07 (--dz) at heights near 1e+10 would repeat heights" --dz 1e-7
+heights "per-iteration steps below double precision" \
+  '8388609\n8388610.125\n8388610.125000002\n' "slices 2 and 3 are 1.86265e-09 apart at heights near 8.38861e+06: --per-iteration's up to --max-iter 300 steps" \
+  --per-iteration --max-iter 300
 
 # ---- usage errors: exit 2 -------------------------------------------------------------------------------
 expect "--spacing 0" 2 "--spacing: 0 must be positive" out reconstruct good -o out --spacing 0
