@@ -187,7 +187,8 @@ static const char score_help[] =
     "A score that is undefined (no boundary anywhere, an empty truth) is null.\n"
     "A result that does not fit TRUTH_DIR and K is refused: its slice count must be\n"
     "the one --spacing K gives, its run.json must count the kept slices, and every\n"
-    "kept slice must come back exactly.\n";
+    "kept slice must come back exactly.  (Slices written by another tool, with no\n"
+    "run.json, are scored without the count check.)\n";
 
 void lsm_cli_help(FILE *f, const char *topic) {
   if (topic && strcmp(topic, "reconstruct") == 0) {

@@ -956,21 +956,30 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
 
 /* The input slice count that OUT_DIR/run.json records ("input": {...,
  * "slices": N), or 0 when there is no run.json or it does not say. */
-static size_t result_input_count(const char *result_dir) {
+/* The number of input slices a result was made from, from its run.json; 0
+ * when it has none (slices written by another tool, such as a reference).  A
+ * run.json that does not say is an error: the result is damaged. */
+static lsm_status result_input_count(const char *result_dir, size_t *count, lsm_err *err) {
   char path[4200];
   snprintf(path, sizeof path, "%s/run.json", result_dir);
+  *count = 0;
   FILE *f = fopen(path, "rb");
-  if (!f) return 0;
+  if (!f && errno == ENOENT) return LSM_OK;
+  if (!f) return lsm_fail(err, LSM_ERR_IO, path, "cannot open: %s", strerror(errno));
   char head[1 << 16]; /* the input object comes before the per-pair list */
   const size_t len = fread(head, 1, sizeof head - 1, f);
   fclose(f);
   head[len] = '\0';
   const char *input = strstr(head, "\"input\": {\"folder\": ");
   const char *slices = input ? strstr(input, "\"slices\": ") : NULL;
-  if (!slices) return 0;
   char *end = NULL;
-  const unsigned long long count = strtoull(slices + strlen("\"slices\": "), &end, 10);
-  return end && (*end == ',' || *end == '}') ? (size_t)count : 0;
+  const unsigned long long n =
+      slices ? strtoull(slices + strlen("\"slices\": "), &end, 10) : 0;
+  if (!slices || !end || (*end != ',' && *end != '}') || n == 0)
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "does not say how many input slices the result was made from (input.slices)");
+  *count = (size_t)n;
+  return LSM_OK;
 }
 
 static lsm_status score(const lsm_cli *cli, lsm_err *err) {
@@ -1003,7 +1012,8 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
                     "%zu slices, but slices 1, %d, %d, ... of the %zu truth slices, "
                     "reconstructed with --spacing %d and the default --dz, give %zu",
                     m, cli->stride + 1, 2 * cli->stride + 1, n, cli->stride, last_input + 1);
-    const size_t inputs = st == LSM_OK ? result_input_count(cli->result_dir) : 0;
+    size_t inputs = 0;
+    if (st == LSM_OK) st = result_input_count(cli->result_dir, &inputs, err);
     if (inputs && inputs != last_input / (size_t)cli->stride + 1)
       st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
                     "was made from %zu slices (run.json), but --stride %d keeps %zu of the %zu "

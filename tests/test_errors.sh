@@ -245,6 +245,10 @@ cp -r r4 r4-bare && rm r4-bare/run.json # without run.json the inputs still tell
 expect "score: stride 2 on a stride-4 result without run.json" 1 \
   "r4-bare/slices/00003.png: differs from the truth slice tall/3.png, which --stride 2 makes an input" - \
   score tall r4-bare --stride 2
+cp -r r4 r4-damaged && printf '{' >r4-damaged/run.json # a run.json that does not count: damaged
+expect "score: a run.json without the input count" 1 \
+  "r4-damaged/run.json: does not say how many input slices the result was made from" - \
+  score tall r4-damaged --stride 4
 expect "score: stride 3 on a stride-2 result" 1 \
   "r2/slices: 9 slices, but slices 1, 4, 7, ... of the 9 truth slices, reconstructed with --spacing 3" - \
   score tall r2 --stride 3
