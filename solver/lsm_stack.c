@@ -1467,6 +1467,17 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
   if (opts->per_iteration && opts->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a solver method, not blend");
   const double dz = opts->dz > 0.0 ? opts->dz : opts->pixel_size;
+  const double z_mag = fmax(fabs(src->z[0]), fabs(src->z[src->count - 1]));
+  for (size_t i = 1; opts->per_iteration && i < src->count; ++i)
+    if (!lsm_output_step_resolved((src->z[i] - src->z[i - 1]) / ((double)opts->max_iter + 1.0),
+                                  z_mag))
+      return lsm_fail(err, LSM_ERR_INPUT, NULL,
+                      "slices %zu and %zu are too close at heights near %g for %d distinct "
+                      "per-iteration heights between them",
+                      i, i + 1, z_mag, opts->max_iter);
+  if (!opts->per_iteration && !lsm_output_step_resolved(dz, z_mag))
+    return lsm_fail(err, LSM_ERR_INPUT, NULL,
+                    "output step %g is too small for distinct heights near %g", dz, z_mag);
   const size_t gaps = src->count - 1;
 
   stack_run r;

@@ -46,6 +46,7 @@
 #ifndef LSM_STACK_H
 #define LSM_STACK_H
 
+#include <float.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -65,6 +66,13 @@
 /* Whether a length lies in that range (false for NaN). */
 static inline int lsm_length_in_range(double v) {
   return v >= LSM_LENGTH_MIN && v <= LSM_LENGTH_MAX;
+}
+
+/* Whether output heights a step apart stay distinct doubles at heights up to
+ * z_mag in size: at least 8 units in the last place (a smaller step repeats
+ * heights in heights.txt, the mesh and the previews). */
+static inline int lsm_output_step_resolved(double step, double z_mag) {
+  return step >= 8.0 * DBL_EPSILON * z_mag;
 }
 
 /* Add new items at the end of each list. */

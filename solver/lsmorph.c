@@ -4,7 +4,6 @@
 #define _XOPEN_SOURCE 700
 #include <dirent.h>
 #include <errno.h>
-#include <float.h>
 #include <ftw.h>
 #if defined(__GLIBC__) || defined(__linux__)
 #include <malloc.h>
@@ -630,14 +629,12 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                       "floats; choose a unit that brings it into range)",
                       k, k + 1, z[k] - z[k - 1], LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   }
-  /* Output heights are doubles: a step below a few units in the last place of
-   * the heights would repeat heights (in heights.txt, the mesh, the previews). */
+  /* output heights are doubles: steps too small for them repeat heights */
   const double z_mag = fmax(fabs(z[0]), fabs(z[src->count - 1]));
-  const double least_step = 8.0 * DBL_EPSILON * z_mag;
   const char *heights_name = cli->heights_file ? cli->heights_file : cli->slice_dir;
   if (cli->stack.per_iteration) {
     for (size_t k = 0; k + 1 < src->count; ++k)
-      if ((z[k + 1] - z[k]) / ((double)cli->stack.max_iter + 1.0) < least_step)
+      if (!lsm_output_step_resolved((z[k + 1] - z[k]) / ((double)cli->stack.max_iter + 1.0), z_mag))
         return lsm_fail(err, LSM_ERR_INPUT, heights_name,
                         "slices %zu and %zu are %g apart at heights near %g: --per-iteration's "
                         "up to --max-iter %d steps between them would repeat heights (double "
@@ -645,7 +642,7 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                         k + 1, k + 2, z[k + 1] - z[k], z_mag, cli->stack.max_iter);
   } else {
     const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
-    if (dz < least_step)
+    if (!lsm_output_step_resolved(dz, z_mag))
       return lsm_fail(err, LSM_ERR_INPUT, heights_name,
                       "output steps of %g (%s) at heights near %g would repeat heights (double "
                       "precision); subtract an offset from the heights or raise --dz",

@@ -983,6 +983,19 @@ static void test_errors(void **state) {
   assert_int_equal(r.sink.n, 0);
   const double zdown[2] = {5, 1};
   assert_int_equal(run_stack(&r, W, H, 0, defs, zdown, 2, &o), LSM_ERR_INPUT);
+  /* output heights double precision cannot tell apart: near 2^33 a unit in
+   * the last place is 2^-19, and a step must be at least 8 of them */
+  const double zfar[2] = {8589934592.0, 8589934592.0 + 0.0009765625};
+  o.dz = 0x1p-18;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, zfar, 2, &o), LSM_ERR_INPUT);
+  assert_int_equal(r.sink.n, 0);
+  o.dz = 0x1p-14;
+  o.method = LSM_METHOD_BLEND;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, zfar, 2, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 17);
+  for (size_t k = 1; k < r.sink.n; ++k) assert_true(r.sink.s[k].z > r.sink.s[k - 1].z);
+  sink_free(&r.sink);
+  default_opts(&o);
   /* A slice of another size. */
   const double z[2] = {0, 4};
   lsm_slice_source source;
