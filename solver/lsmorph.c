@@ -633,13 +633,15 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
   const double z_mag = fmax(fabs(z[0]), fabs(z[src->count - 1]));
   const char *heights_name = cli->heights_file ? cli->heights_file : cli->slice_dir;
   if (cli->stack.per_iteration) {
-    for (size_t k = 0; k + 1 < src->count; ++k)
-      if (!lsm_output_step_resolved((z[k + 1] - z[k]) / ((double)cli->stack.max_iter + 1.0), z_mag))
+    for (size_t k = 0; k + 1 < src->count; ++k) {
+      const double step = (z[k + 1] - z[k]) / ((double)cli->stack.max_iter + 1.0);
+      if (!lsm_output_step_resolved(step, z_mag))
         return lsm_fail(err, LSM_ERR_INPUT, heights_name,
                         "slices %zu and %zu are %g apart at heights near %g: --per-iteration's "
                         "up to --max-iter %d steps between them would repeat heights (double "
                         "precision); subtract an offset from the heights or lower --max-iter",
                         k + 1, k + 2, z[k + 1] - z[k], z_mag, cli->stack.max_iter);
+    }
   } else {
     const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
     if (!lsm_output_step_resolved(dz, z_mag))
@@ -951,8 +953,6 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
 
 /* ---- score ------------------------------------------------------------------------------ */
 
-/* The input slice count that OUT_DIR/run.json records ("input": {...,
- * "slices": N), or 0 when there is no run.json or it does not say. */
 /* The number of input slices a result was made from, from its run.json; 0
  * when it has none (slices written by another tool, such as a reference).  A
  * run.json that does not say is an error: the result is damaged. */
