@@ -18,6 +18,9 @@ Bad ones:
   huge (a valid signature and IHDR of 200000 x 200000 pixels, then nothing)
   huge_idat (the same header with a short IDAT and IEND)
   text_liar (IHDR, then a tEXt chunk that claims 2^31 - 1 bytes and ends the file)
+
+From Python (sys.path holding tests/): write_drawn(PATH, ROWS) writes an 8-bit gray
+mask drawn as text rows, "#" inside (255) and anything else outside (0).
 """
 import struct
 import sys
@@ -34,6 +37,14 @@ def chunk(kind, data, crc=None):
 
 def ihdr(w, h, depth, color, interlace=0):
     return chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, depth, color, 0, 0, interlace))
+
+
+def write_drawn(path, rows):
+    """An 8-bit gray mask drawn as text rows: "#" inside (255), anything else 0."""
+    raw = b"".join(b"\x00" + bytes(255 if c == "#" else 0 for c in r) for r in rows)
+    with open(path, "wb") as f:
+        f.write(SIG + ihdr(len(rows[0]), len(rows), 8, 0) + chunk(b"IDAT", zlib.compress(raw, 9)) +
+                chunk(b"IEND", b""))
 
 
 def disc(w, h, radius):
