@@ -201,6 +201,13 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
 }
 
 lsm_status lsm_morph_advance_to(lsm_morph *m, double t, int max_iter, lsm_err *err) {
+  if (!isfinite(m->dt)) {
+    /* At rest (phi == phi_target, or no gradient anywhere): phi stays as it
+     * is for all time, so any time is reached without a step. */
+    if (m->time < t) m->time = t;
+    m->cp = 0.0;
+    return LSM_OK;
+  }
   /* A relative slack keeps round-off from adding a vanishing extra step. */
   while (m->time < t * (1.0 - 1e-12) && m->iterations < max_iter) {
     if (m->opts.stop && *m->opts.stop)

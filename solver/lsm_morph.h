@@ -54,7 +54,8 @@ lsm_status lsm_morph_step(lsm_morph *morph, double max_dt, lsm_err *err);
 
 /* Steps until the time reaches t (the last step shortened to land on t
  * exactly), or max_iter steps in all have been taken (then returns LSM_OK with
- * the time short of t: check lsm_morph_time). */
+ * the time short of t: check lsm_morph_time).  A morph at rest (dt infinite:
+ * nothing can move) reaches t at once, with no step. */
 lsm_status lsm_morph_advance_to(lsm_morph *morph, double t, int max_iter, lsm_err *err);
 
 /* The current phi on the host (downloaded from the device when the backend

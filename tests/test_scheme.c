@@ -881,6 +881,33 @@ static void test_morph_dt_and_landing(void **state) {
   lsm_grid_destroy(&tgt);
 }
 
+/* Identical slices: nothing can move (dt infinite), so every time is reached
+ * at once, with no step, whatever max_iter allows. */
+static void test_morph_at_rest(void **state) {
+  (void)state;
+  lsm_grid *src = new_grid(24, 24, 1.0f, 1.0f);
+  fill_circle(src, 0, 0, 7.0, 1.0);
+  lsm_morph_opts o;
+  lsm_morph_opts_default(&o);
+  lsm_morph *m = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_morph_create(src, src, &o, &m, &err), LSM_OK);
+  assert_true(isinf(lsm_morph_dt(m)));
+  const double times[] = {0.25, 0.7, 3.0};
+  for (size_t k = 0; k < sizeof times / sizeof times[0]; ++k) {
+    assert_int_equal(lsm_morph_advance_to(m, times[k], 1, &err), LSM_OK);
+    assert_close(lsm_morph_time(m), times[k], 0.0);
+  }
+  assert_int_equal(lsm_morph_iterations(m), 0);
+  assert_close(lsm_morph_cp(m), 0.0, 0.0);
+  const lsm_grid *phi = lsm_morph_phi(m);
+  assert_non_null(phi);
+  assert_close(lsm_grid_diff_norm(phi, src, 1), 0.0, 0.0);
+  lsm_morph_destroy(&m);
+  lsm_grid_destroy(&src);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_upwind_linear),
@@ -898,6 +925,7 @@ int main(void) {
       cmocka_unit_test(test_circles_roefix),
       cmocka_unit_test(test_integrators_circle),
       cmocka_unit_test(test_reinit),
+      cmocka_unit_test(test_morph_at_rest),
       cmocka_unit_test(test_time_of_fraction),
       cmocka_unit_test(test_morph_dt_and_landing),
   };
