@@ -15,14 +15,15 @@ static const char general_help[] =
     "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
     "  lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
     "  lsmorph devices\n"
-    "  lsmorph --help | --version | help COMMAND\n"
+    "  lsmorph --help | --version | help reconstruct|score|devices\n"
     "\n"
     "Commands:\n"
     "  reconstruct   read PNG slices, morph between consecutive slices, write a volume\n"
     "  score         compare a reconstruction with full-resolution truth slices\n"
     "  devices       list the OpenCL platforms and devices\n"
     "\n"
-    "Run 'lsmorph help reconstruct' for the options.\n";
+    "Run 'lsmorph help reconstruct' for the options.  Every option also takes the\n"
+    "form --name=value.\n";
 
 static const char reconstruct_help[] =
     "Usage: lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
@@ -127,8 +128,9 @@ static const char reconstruct_help_method[] =
     "                         waiting output slices fit in 512 MiB; else inside a gap\n"
     "  --backend c|opencl|auto  where the grid work runs (default c, the reference);\n"
     "                         auto: OpenCL when a device is present, else C\n"
-    "  --device N             OpenCL device index from 'lsmorph devices'\n"
-    "  -q, --quiet            no progress or notes on stderr\n"
+    "  --device N             OpenCL device index from 'lsmorph devices' (default:\n"
+    "                         the first GPU listed, else device 0)\n"
+    "  -q, --quiet            no progress or notes on stderr (errors still)\n"
     "\n";
 
 /* (several strings: one would pass the 4095 characters C compilers must support) */
@@ -169,15 +171,18 @@ static const char score_help[] =
     "Usage: lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
     "\n"
     "Scores a reconstruction made from every K-th slice of TRUTH_DIR (the 1st,\n"
-    "(K+1)-th, ... in natural order, with --spacing 1) against the slices left out:\n"
-    "OUT_DIR/slices/N.png is compared with the N-th truth slice for every N that was\n"
-    "not an input.  Prints one JSON object (distances in pixels, symmetric, between\n"
-    "boundary pixels):\n"
+    "(K+1)-th, ... in natural order; K >= 2), reconstructed with --spacing K and\n"
+    "the default --dz and --pixel-size, against the slices left out: OUT_DIR/\n"
+    "slices/N.png is compared with the N-th truth slice for every N that was not an\n"
+    "input, up to the last kept slice (nothing is extrapolated past it; a note\n"
+    "names the truth slices beyond it, which are not scored).  Prints one JSON\n"
+    "object (distances in pixels, symmetric, between boundary pixels):\n"
     "  held_out         slices scored\n"
     "  dice_volume      Dice pooled over all held-out slices\n"
     "  dice             mean Dice per slice\n"
     "  hd95             mean 95 % Hausdorff distance over the slices non-empty on\n"
-    "                   both sides\n"
+    "                   both sides (slices empty on both sides have no boundary\n"
+    "                   and are left out of it and of mean_surface)\n"
     "  hd95_pooled      95 % Hausdorff distance over all boundary pixels pooled; a\n"
     "                   slice empty on one side only counts the image size for each\n"
     "                   of its boundary pixels\n"
@@ -190,6 +195,15 @@ static const char score_help[] =
     "kept slice must come back exactly.  (Slices written by another tool, with no\n"
     "run.json, are scored without the count check.)\n";
 
+static const char devices_help[] =
+    "Usage: lsmorph devices\n"
+    "\n"
+    "Lists the OpenCL platforms and devices this machine offers, one index each, with\n"
+    "name, type, version, compute units and global memory.  'reconstruct --backend\n"
+    "opencl --device N' runs on device N; without --device, on the first GPU listed,\n"
+    "else on device 0.  Exits 1 when OpenCL is not available (no ICD loader or no\n"
+    "platform).\n";
+
 void lsm_cli_help(FILE *f, const char *topic) {
   if (topic && strcmp(topic, "reconstruct") == 0) {
     fputs(reconstruct_help, f);
@@ -198,6 +212,8 @@ void lsm_cli_help(FILE *f, const char *topic) {
   }
   else if (topic && strcmp(topic, "score") == 0)
     fputs(score_help, f);
+  else if (topic && strcmp(topic, "devices") == 0)
+    fputs(devices_help, f);
   else
     fputs(general_help, f);
 }
@@ -276,6 +292,7 @@ static void cli_defaults(lsm_cli *cli) {
   cli->values = LSM_VALUES_SDF;
   cli->mesh = 0;
   cli->preview = 1;
+  cli->device = -1; /* the first GPU, else the first device */
   lsm_stack_opts_default(&cli->stack);
 }
 
@@ -488,9 +505,10 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
     cli->command = LSM_CMD_HELP;
     cli->help_topic = argc > 2 ? argv[2] : NULL;
     if (cli->help_topic && strcmp(cli->help_topic, "reconstruct") != 0 &&
-        strcmp(cli->help_topic, "score") != 0)
+        strcmp(cli->help_topic, "score") != 0 && strcmp(cli->help_topic, "devices") != 0)
       return lsm_fail(err, LSM_ERR_USAGE, NULL,
-                      "help: no command '%s' (help reconstruct, help score)", cli->help_topic);
+                      "help: no command '%s' (help reconstruct, help score, help devices)",
+                      cli->help_topic);
     return LSM_OK;
   }
   if (strcmp(cmd, "-V") == 0 || strcmp(cmd, "--version") == 0) {
@@ -503,6 +521,11 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   }
   if (strcmp(cmd, "devices") == 0) {
     cli->command = LSM_CMD_DEVICES;
+    if (argc == 3 && (strcmp(argv[2], "-h") == 0 || strcmp(argv[2], "--help") == 0)) {
+      cli->command = LSM_CMD_HELP;
+      cli->help_topic = "devices";
+      return LSM_OK;
+    }
     if (argc > 2) return lsm_fail(err, LSM_ERR_USAGE, NULL, "devices takes no arguments");
     return LSM_OK;
   }

@@ -991,7 +991,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   }
   lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
-  size_t count = 0, incomparable = 0, pool_n = 0, pool_cap = 0;
+  size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
   double *pool = NULL;
   /* truth stored as 0/1 labels is read as such (the result slices are 0/255) */
   lsm_status st = pick_foreground(truth, n, &ro_truth, 1, cli->truth_dir, err);
@@ -1045,11 +1045,12 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
       vol_r += (double)s.area_result;
       vol_t += (double)s.area_truth;
       inter += s.dice * (double)(s.area_result + s.area_truth) / 2.0;
-      if (s.comparable) {
+      if (!s.comparable) {
+        incomparable++;
+      } else if (s.area_result || s.area_truth) { /* both empty: no boundary to measure */
         hd95 += s.hd95;
         msd += s.mean_surface;
-      } else {
-        incomparable++;
+        measured++;
       }
       count++;
     }
@@ -1060,7 +1061,11 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   double pooled = lsm_quantile(pool, pool_n, 0.95);
   free(pool);
   if (st != LSM_OK) return st;
-  size_t cmp = count - incomparable;
+  if (last_input + 1 < n)
+    fprintf(stderr,
+            "lsmorph: note: truth slices %zu to %zu lie past the last kept slice (%zu) and are "
+            "not scored (nothing is extrapolated past it)\n",
+            last_input + 2, n, last_input + 1);
   /* undefined scores (no held-out slice, no boundary on both sides, an empty
    * truth) are JSON null, as in run.json */
   printf("{\"held_out\": %zu, \"dice_volume\": ", count);
@@ -1068,11 +1073,11 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   printf(", \"dice\": ");
   json_number(stdout, count ? dice / (double)count : NAN);
   printf(", \"hd95\": ");
-  json_number(stdout, cmp ? hd95 / (double)cmp : NAN);
+  json_number(stdout, measured ? hd95 / (double)measured : NAN);
   printf(", \"hd95_pooled\": ");
   json_number(stdout, pooled);
   printf(", \"mean_surface\": ");
-  json_number(stdout, cmp ? msd / (double)cmp : NAN);
+  json_number(stdout, measured ? msd / (double)measured : NAN);
   printf(", \"volume_error\": ");
   json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
   printf(", \"one_sided_empty\": %zu}\n", incomparable);

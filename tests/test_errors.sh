@@ -254,6 +254,17 @@ expect "score: stride 3 on a stride-2 result" 1 \
   score tall r2 --stride 3
 expect "score: another size" 1 "r2/slices/00001.png: slice is 32x32 but the truth slice tall40/1.png is 40x40" - \
   score tall40 r2 --stride 2
+# truth slices past the last kept one are not scored, and a note says so
+mkdir -p tall3 && cp tall/1.png tall/4.png tall/7.png tall3/
+"$LSM" reconstruct tall3 -o r3 --spacing 3 -q --no-preview >/dev/null 2>"$TMP/stderr" &&
+  "$LSM" score tall r3 --stride 3 >"$TMP/stdout" 2>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && grep -q '"held_out": 4,' "$TMP/stdout" &&
+  grep -q -F "lsmorph: note: truth slices 8 to 9 lie past the last kept slice (7) and are not scored" "$TMP/stderr"; then
+  ok
+else
+  bad "score past the last kept slice: exit $rc: $(cat "$TMP/stdout" "$TMP/stderr")"
+fi
 
 # ---- output path ------------------------------------------------------------------------------------------
 expect "OUT under a regular file" 1 "afile/out: cannot create a folder next to it: Not a directory" \
@@ -319,7 +330,8 @@ if [ $rc -eq 0 ] && [ "$(inside out-empty/volume.nrrd)" -eq 0 ] &&
 else
   bad "all-empty slices: exit $rc ($(cat "$TMP/stderr"))"
 fi
-# score prints strict JSON: undefined scores (no boundary anywhere, an empty truth) are null, not nan
+# score prints strict JSON: undefined scores (no boundary anywhere, an empty truth) are null, not nan;
+# a held-out slice empty on both sides has no boundary: hd95 and mean_surface leave it out
 mkdir -p e13 && cp k-empty/1.png k-empty/3.png e13/
 "$LSM" reconstruct e13 -o out-e13 --spacing 2 -q --no-preview >/dev/null 2>"$TMP/stderr" &&
   "$LSM" score k-empty out-e13 --stride 2 >"$TMP/stdout" 2>>"$TMP/stderr"
@@ -327,7 +339,8 @@ rc=$?
 if [ $rc -eq 0 ] && "$PY" -c 'import json, sys
 def reject(c): raise ValueError(c)
 j = json.load(open(sys.argv[1]), parse_constant=reject)
-sys.exit(not (j["held_out"] == 1 and j["hd95_pooled"] is None and j["volume_error"] is None and j["dice"] == 1))' \
+sys.exit(not (j["held_out"] == 1 and j["hd95_pooled"] is None and j["volume_error"] is None and j["dice"] == 1
+              and j["hd95"] is None and j["mean_surface"] is None))' \
   "$TMP/stdout"; then
   ok
 else

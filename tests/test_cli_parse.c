@@ -1,0 +1,76 @@
+/* The command line parsed into options (solver/lsm_cli.h): the defaults the
+ * README's option table states, the --name=value form, and help topics. */
+#include "lsm_test.h"
+
+#include "../solver/lsm_cli.h"
+
+static lsm_status parse(lsm_cli *cli, lsm_err *err, int argc, char **argv) {
+  lsm_err_clear(err);
+  return lsm_cli_parse(argc, argv, cli, err);
+}
+
+/* README: "--device N | first GPU, else first device"; -1 asks the OpenCL
+ * backend for that search (kernels/lsm_backend_cl.c). */
+static void test_reconstruct_defaults(void **state) {
+  (void)state;
+  char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out"};
+  lsm_cli cli;
+  lsm_err err;
+  assert_int_equal(parse(&cli, &err, 5, argv), LSM_OK);
+  assert_int_equal(cli.command, LSM_CMD_RECONSTRUCT);
+  assert_int_equal(cli.device, -1);
+  assert_int_equal(cli.backend, LSM_BACKEND_C);
+  assert_true(cli.spacing == 1.0);
+  assert_int_equal(cli.threads, 0);
+  assert_true(cli.max_pixels == (uint64_t)1 << 28);
+  assert_true(cli.max_voxels == (uint64_t)1 << 34);
+  assert_int_equal(cli.stack.max_iter, 100000);
+  assert_true(cli.stack.morph.cfl == 0.75);
+  assert_true(cli.stack.tol == 0.25);
+}
+
+static void test_long_forms(void **state) {
+  (void)state;
+  char *argv[] = {"lsmorph", "reconstruct", "in", "--output=out", "--device=2", "--quiet",
+                  "--max-iter", "7"};
+  lsm_cli cli;
+  lsm_err err;
+  assert_int_equal(parse(&cli, &err, 8, argv), LSM_OK);
+  assert_string_equal(cli.out_dir, "out");
+  assert_int_equal(cli.device, 2);
+  assert_int_equal(cli.quiet, 1);
+  assert_int_equal(cli.stack.max_iter, 7);
+}
+
+static void test_help_topics(void **state) {
+  (void)state;
+  const char *topics[] = {"reconstruct", "score", "devices"};
+  for (size_t k = 0; k < sizeof topics / sizeof topics[0]; ++k) {
+    char *argv[] = {"lsmorph", "help", (char *)topics[k]};
+    lsm_cli cli;
+    lsm_err err;
+    assert_int_equal(parse(&cli, &err, 3, argv), LSM_OK);
+    assert_int_equal(cli.command, LSM_CMD_HELP);
+    assert_string_equal(cli.help_topic, topics[k]);
+  }
+  char *devices_help[] = {"lsmorph", "devices", "--help"};
+  lsm_cli cli;
+  lsm_err err;
+  assert_int_equal(parse(&cli, &err, 3, devices_help), LSM_OK);
+  assert_int_equal(cli.command, LSM_CMD_HELP);
+  assert_string_equal(cli.help_topic, "devices");
+  char *unknown[] = {"lsmorph", "help", "nothing"};
+  assert_int_equal(parse(&cli, &err, 3, unknown), LSM_ERR_USAGE);
+  assert_non_null(strstr(err.msg, "help devices"));
+  char *extra[] = {"lsmorph", "devices", "0"};
+  assert_int_equal(parse(&cli, &err, 3, extra), LSM_ERR_USAGE);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_reconstruct_defaults),
+      cmocka_unit_test(test_long_forms),
+      cmocka_unit_test(test_help_topics),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
