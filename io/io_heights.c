@@ -102,7 +102,7 @@ lsm_status lsm_heights_parse(const char *text, size_t length, const char *name,
       st = lsm_fail(err, LSM_ERR_INPUT, name, "line %zu: \"%s\" is not a number", line_no, quoted);
       break;
     }
-    if (!isfinite(v)) {
+    if (!isfinite(v) || errno == ERANGE) { /* overflow, or underflow to 0 or a subnormal */
       st = lsm_fail(err, LSM_ERR_INPUT, name, "line %zu: \"%s\" is out of range", line_no, quoted);
       break;
     }

@@ -98,6 +98,9 @@ typedef struct png_reader {
   png_uint_32 width, height;
   png_bytep buffer; /* one row, or the whole image when interlaced */
   png_bytepp rows;  /* row pointers into buffer (interlaced only) */
+  int palette;      /* 1: rows hold palette indices, mapped through palette_mask */
+  int num_palette;
+  uint8_t palette_mask[256]; /* 0/1 of each palette entry (the rule of convert_row) */
   lsm_mask mask;
 } png_reader;
 
@@ -127,6 +130,40 @@ static void convert_row(png_const_bytep row, png_uint_32 width, int channels, in
     if (has_alpha) alpha = sample_at(p + (size_t)(channels - 1) * step, wide);
     int bright = nonzero ? lum * alpha > 0u : lum * alpha * 2u >= limit;
     out[x] = (uint8_t)(invert ? !bright : bright);
+  }
+}
+
+/* A palette image's row: each index through its entry's 0/1.  An index past
+ * the palette is an error (the PNG specification's; libpng would read it as
+ * black).  Returns 1, or 0 with the error set. */
+static int convert_index_row(png_reader *r, png_const_bytep row, png_uint_32 y, uint8_t *out) {
+  for (png_uint_32 x = 0; x < r->width; ++x) {
+    if (row[x] >= r->num_palette) {
+      char text[160];
+      snprintf(text, sizeof text,
+               "pixel (%" PRIu32 ", %" PRIu32 ") has palette index %d, but the palette has %d "
+               "entr%s",
+               (uint32_t)x, (uint32_t)y, row[x], r->num_palette, r->num_palette == 1 ? "y" : "ies");
+      png_io_set(&r->io, LSM_ERR_INPUT, "corrupt PNG: ", text);
+      return 0;
+    }
+    out[x] = r->palette_mask[row[x]];
+  }
+  return 1;
+}
+
+/* Each palette entry, with its tRNS alpha, to 0/1 by convert_row's rule. */
+static void palette_to_mask(png_reader *r, int invert, int nonzero) {
+  png_colorp palette = NULL;
+  png_bytep trans = NULL;
+  int num_trans = 0;
+  r->num_palette = 0;
+  if (!png_get_PLTE(r->png, r->info, &palette, &r->num_palette)) r->num_palette = 0;
+  if (!png_get_tRNS(r->png, r->info, &trans, &num_trans, NULL)) num_trans = 0;
+  for (int k = 0; k < r->num_palette && k < 256; ++k) {
+    const png_byte rgba[4] = {palette[k].red, palette[k].green, palette[k].blue,
+                              k < num_trans ? trans[k] : 255};
+    convert_row(rgba, 1, 4, 8, invert, nonzero, &r->palette_mask[k]);
   }
 }
 
@@ -163,9 +200,18 @@ static int png_read_guarded(png_reader *r) {
 
   int color_type = png_get_color_type(r->png, r->info);
   int depth = png_get_bit_depth(r->png, r->info);
-  if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(r->png);
-  if (color_type == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(r->png);
-  if (png_get_valid(r->png, r->info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(r->png);
+  int invert = r->opts ? r->opts->invert : 0;
+  int nonzero = r->opts ? r->opts->nonzero : 0;
+  r->palette = color_type == PNG_COLOR_TYPE_PALETTE;
+  if (r->palette) {
+    /* indices, one byte each, mapped here so that an index past the palette
+     * is caught */
+    palette_to_mask(r, invert, nonzero);
+    if (depth < 8) png_set_packing(r->png);
+  } else {
+    if (color_type == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(r->png);
+    if (png_get_valid(r->png, r->info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(r->png);
+  }
   /* 16-bit samples stay big-endian (network order) and are decoded by hand. */
   int passes = png_set_interlace_handling(r->png);
   png_read_update_info(r->png, r->info);
@@ -174,7 +220,8 @@ static int png_read_guarded(png_reader *r) {
   depth = png_get_bit_depth(r->png, r->info);
   size_t rowbytes = png_get_rowbytes(r->png, r->info);
   if ((depth != 8 && depth != 16) || channels < 1 || channels > 4 ||
-      rowbytes / (size_t)channels / (size_t)(depth / 8) < r->width) {
+      rowbytes / (size_t)channels / (size_t)(depth / 8) < r->width ||
+      (r->palette && (depth != 8 || channels != 1))) {
     png_io_set(&r->io, LSM_ERR_INTERNAL, "", "unexpected pixel layout after libpng transforms");
     return 0;
   }
@@ -186,8 +233,6 @@ static int png_read_guarded(png_reader *r) {
   }
   r->mask.width = (int)r->width;
   r->mask.height = (int)r->height;
-  int invert = r->opts ? r->opts->invert : 0;
-  int nonzero = r->opts ? r->opts->nonzero : 0;
 
   if (passes <= 1) {
     r->buffer = malloc(rowbytes);
@@ -197,8 +242,12 @@ static int png_read_guarded(png_reader *r) {
     }
     for (png_uint_32 y = 0; y < r->height; ++y) {
       png_read_row(r->png, r->buffer, NULL);
-      convert_row(r->buffer, r->width, channels, depth, invert, nonzero,
-                  r->mask.pixels + (size_t)y * r->width);
+      uint8_t *out = r->mask.pixels + (size_t)y * r->width;
+      if (r->palette) {
+        if (!convert_index_row(r, r->buffer, y, out)) return 0;
+      } else {
+        convert_row(r->buffer, r->width, channels, depth, invert, nonzero, out);
+      }
     }
   } else {
     size_t bytes;
@@ -219,9 +268,14 @@ static int png_read_guarded(png_reader *r) {
     }
     for (png_uint_32 y = 0; y < r->height; ++y) r->rows[y] = r->buffer + (size_t)y * rowbytes;
     png_read_image(r->png, r->rows);
-    for (png_uint_32 y = 0; y < r->height; ++y)
-      convert_row(r->rows[y], r->width, channels, depth, invert, nonzero,
-                  r->mask.pixels + (size_t)y * r->width);
+    for (png_uint_32 y = 0; y < r->height; ++y) {
+      uint8_t *out = r->mask.pixels + (size_t)y * r->width;
+      if (r->palette) {
+        if (!convert_index_row(r, r->rows[y], y, out)) return 0;
+      } else {
+        convert_row(r->rows[y], r->width, channels, depth, invert, nonzero, out);
+      }
+    }
   }
   png_read_end(r->png, NULL); /* checks the rest of the image data and CRCs */
   return 1;
@@ -234,6 +288,8 @@ static void png_reader_init(png_reader *r) {
   r->width = r->height = 0;
   r->buffer = NULL;
   r->rows = NULL;
+  r->palette = 0;
+  r->num_palette = 0;
   r->mask.width = r->mask.height = 0;
   r->mask.pixels = NULL;
 }
@@ -244,7 +300,7 @@ static void png_reader_init(png_reader *r) {
  * limit message.  Only on seekable streams (files, fmemopen), with a complete
  * IHDR whose CRC is right; everything else is left to libpng.  The stream is
  * put back right after the signature.  Returns 0 when the image is over the
- * limit (the message is in r->io). */
+ * limit or the stream cannot be put back (the message is in r->io). */
 static int ihdr_within_limit(png_reader *r) {
   const uint64_t max_pixels = r->opts ? r->opts->max_pixels : 0;
   if (max_pixels == 0) return 1;
@@ -262,7 +318,10 @@ static int ihdr_within_limit(png_reader *r) {
     over = w > 0 && h > 0 && (uint64_t)w * (uint64_t)h > max_pixels; /* < 2^64 */
   }
   clearerr(fp);
-  if (fseek(fp, start, SEEK_SET) != 0) return 1; /* libpng reports what follows */
+  if (fseek(fp, start, SEEK_SET) != 0) {
+    png_io_set(&r->io, LSM_ERR_IO, "", "cannot seek back to the PNG header");
+    return 0;
+  }
   if (!over) return 1;
   char text[160];
   snprintf(text, sizeof text, "image is %" PRIu32 "x%" PRIu32 " = %" PRIu64

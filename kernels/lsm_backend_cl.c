@@ -183,11 +183,12 @@ static lsm_status cl_enumerate(cl_dev_ref **out, cl_uint *count, lsm_err *err) {
   for (cl_uint p = 0; p < nplat && st == LSM_OK; ++p) {
     cl_uint nd = 0;
     e = clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, 0, NULL, &nd);
-    if (e == CL_DEVICE_NOT_FOUND || nd == 0) continue;
-    if (e != CL_SUCCESS) {
+    if (e == CL_DEVICE_NOT_FOUND) continue;
+    if (e != CL_SUCCESS) { /* a platform skipped would renumber the devices after it */
       st = cl_fail(err, "no device", "clGetDeviceIDs", e);
       break;
     }
+    if (nd == 0) continue;
     cl_device_id *devs = calloc(nd, sizeof *devs);
     cl_dev_ref *grown = realloc(refs, (size_t)(n + nd) * sizeof *refs);
     if (grown) refs = grown;
@@ -243,11 +244,23 @@ static const char *device_type_name(cl_device_type t) {
   return "other";
 }
 
+/* The device taken without --device: the first GPU listed, else the first. */
+static cl_uint default_device(const cl_dev_ref *refs, cl_uint n) {
+  for (cl_uint k = 0; k < n; ++k) {
+    cl_device_type t = 0;
+    if (clGetDeviceInfo(refs[k].device, CL_DEVICE_TYPE, sizeof t, &t, NULL) == CL_SUCCESS &&
+        (t & CL_DEVICE_TYPE_GPU))
+      return k;
+  }
+  return 0;
+}
+
 lsm_status lsm_backend_cl_list(FILE *f, lsm_err *err) {
   cl_dev_ref *refs = NULL;
   cl_uint n = 0;
   LSM_TRY(cl_enumerate(&refs, &n, err));
-  fprintf(f, "OpenCL devices (--device N):\n");
+  const cl_uint taken = default_device(refs, n);
+  fprintf(f, "OpenCL devices (--device N; without it, the default):\n");
   for (cl_uint k = 0; k < n; ++k) {
     char name[256], plat[256], version[256], driver[128];
     cl_device_type type = 0;
@@ -264,7 +277,7 @@ lsm_status lsm_backend_cl_list(FILE *f, lsm_err *err) {
                                           sizeof units, &units, NULL) == CL_SUCCESS;
     const int has_mem = clGetDeviceInfo(refs[k].device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem,
                                         &mem, NULL) == CL_SUCCESS;
-    fprintf(f, "  %u: %s (%s)\n     type %s, ", k, name, plat,
+    fprintf(f, "  %u: %s (%s)%s\n     type %s, ", k, name, plat, k == taken ? ", the default" : "",
             has_type ? device_type_name(type) : "unknown");
     if (has_units)
       fprintf(f, "%u compute unit%s, ", units, units == 1 ? "" : "s");
@@ -547,15 +560,7 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
   LSM_TRY(cl_enumerate(&refs, &n, err));
   int pick = device;
   if (device < 0) {
-    pick = 0;
-    for (cl_uint k = 0; k < n; ++k) {
-      cl_device_type t = 0;
-      if (clGetDeviceInfo(refs[k].device, CL_DEVICE_TYPE, sizeof t, &t, NULL) == CL_SUCCESS &&
-          (t & CL_DEVICE_TYPE_GPU)) {
-        pick = (int)k;
-        break;
-      }
-    }
+    pick = (int)default_device(refs, n);
   } else if ((cl_uint)device >= n) {
     free(refs);
     return lsm_fail(err, LSM_ERR_INPUT, NULL,

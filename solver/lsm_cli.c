@@ -457,6 +457,8 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "-o: the output folder name is empty");
   if (!*cli->slice_dir)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: SLICE_DIR is empty");
+  if (cli->heights_file && !*cli->heights_file)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--heights: the file name is empty");
   if (so->per_iteration && so->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL,
                     "--per-iteration needs a level-set method (--method ls or pls)");
@@ -488,6 +490,9 @@ static lsm_status parse_score(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   }
   if (!cli->truth_dir || !cli->result_dir)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "score: needs TRUTH_DIR and OUT_DIR");
+  if (!*cli->truth_dir || !*cli->result_dir)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "score: %s is empty",
+                    *cli->truth_dir ? "OUT_DIR" : "TRUTH_DIR");
   if (!cli->stride) return lsm_fail(err, LSM_ERR_USAGE, NULL, "score: needs --stride K");
   return LSM_OK;
 }

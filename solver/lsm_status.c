@@ -27,8 +27,8 @@ lsm_status lsm_fail(lsm_err *err, lsm_status status, const char *where,
   if (!err || err->status != LSM_OK) return status;
   err->status = status;
   size_t used = 0;
-  if (where && *where) {
-    int n = snprintf(err->msg, sizeof err->msg, "%s: ", where);
+  if (where) { /* an empty name still shows where: '' */
+    int n = snprintf(err->msg, sizeof err->msg, "%s: ", *where ? where : "''");
     used = n < 0 ? 0 : ((size_t)n >= sizeof err->msg ? sizeof err->msg - 1 : (size_t)n);
   }
   va_list ap;

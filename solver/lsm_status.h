@@ -45,7 +45,7 @@ const char *lsm_status_name(lsm_status status);
 void lsm_err_clear(lsm_err *err);
 
 /* Records "<where>: <printf-formatted what>" (or just "<what>" when where is
- * NULL) in err if err is non-NULL and holds no earlier error; returns status.
+ * NULL; an empty where reads '') in err if err is non-NULL and holds no earlier error; returns status.
  * Typical use:  return lsm_fail(err, LSM_ERR_INPUT, path, "not a PNG file"); */
 lsm_status lsm_fail(lsm_err *err, lsm_status status, const char *where,
                     const char *fmt, ...)

@@ -4,6 +4,7 @@
 #define _XOPEN_SOURCE 700
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <ftw.h>
 #if defined(__GLIBC__) || defined(__linux__)
 #include <malloc.h>
@@ -1086,6 +1087,29 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   return LSM_OK;
 }
 
+/* Whatever went to standard output (help, version, the device list) reached it. */
+static lsm_status check_stdout(lsm_err *err) {
+  if (fflush(stdout) != 0 || ferror(stdout))
+    return lsm_fail(err, LSM_ERR_IO, "standard output", "write failed: %s", strerror(errno));
+  return LSM_OK;
+}
+
+/* With file descriptor 0, 1 or 2 closed by the caller, the first file opened
+ * would take its number, and stderr's progress lines would land in a volume
+ * file: hold every one of them open (on /dev/null). */
+static int hold_standard_fds(void) {
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (fcntl(fd, F_GETFD) != -1) continue;
+    const int got = open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    if (got < 0) return -1;
+    if (got != fd) { /* lower ones are open, so got > fd: should not happen */
+      close(got);
+      return -1;
+    }
+  }
+  return 0;
+}
+
 static int run(int argc, char **argv, const lsm_mpi *mpi) {
   lsm_cli cli;
   lsm_err err;
@@ -1098,16 +1122,19 @@ static int run(int argc, char **argv, const lsm_mpi *mpi) {
   switch (cli.command) {
   case LSM_CMD_HELP:
     lsm_cli_help(stdout, cli.help_topic);
-    return 0;
+    st = check_stdout(&err);
+    break;
   case LSM_CMD_VERSION:
     printf("lsmorph %s\n", LSM_VERSION);
-    return 0;
+    st = check_stdout(&err);
+    break;
   case LSM_CMD_RECONSTRUCT:
     install_stop_handlers(0);
     st = reconstruct(argc, argv, &cli, mpi, &err);
     break;
   case LSM_CMD_DEVICES:
     st = lsm_backend_list_devices(stdout, &err);
+    if (st == LSM_OK) st = check_stdout(&err);
     break;
   case LSM_CMD_SCORE:
     st = score(&cli, &err);
@@ -1144,6 +1171,7 @@ int main(int argc, char **argv) {
   mallopt(M_MMAP_THRESHOLD, 1 << 30);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
 #endif
+  if (hold_standard_fds() != 0) return 1; /* no stderr to say so */
   lsm_mpi *mpi = NULL;
   lsm_err err;
   lsm_err_clear(&err);

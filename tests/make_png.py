@@ -72,6 +72,8 @@ def row_bytes(kind, row):
     out = bytearray()
     if kind == "gray1":
         return pack_bits([1 if v else 0 for v in row], 1)
+    if kind == "palette2":  # 2-bit indices: 3 (white, with alpha) inside, 1 (dark gray) outside
+        return pack_bits([3 if v else 1 for v in row], 2)
     for v in row:
         if kind in ("gray8", "interlaced", "empty"):
             out += bytes([200 if v and kind != "empty" else 10])
@@ -89,7 +91,7 @@ def row_bytes(kind, row):
             out += bytes([255, 255, 255, 255]) if v else bytes([255, 255, 255, 0])
         elif kind == "rgba16":
             out += struct.pack(">HHHH", 65535, 65535, 65535, 65535) if v else struct.pack(">HHHH", 65535, 65535, 65535, 0)
-        elif kind in ("palette", "palette_trns"):
+        elif kind in ("palette", "palette_trns", "palette_short"):
             out += bytes([1 if v else 0])
         else:
             raise SystemExit("unknown kind " + kind)
@@ -100,7 +102,8 @@ HEADER = {  # kind: (bit depth, colour type)
     "gray8": (8, 0), "interlaced": (8, 0), "empty": (8, 0), "label01": (8, 0), "gray16": (16, 0),
     "gray1": (1, 0),
     "graya8": (8, 4), "rgb8": (8, 2), "rgb16": (16, 2), "rgba8": (8, 6), "rgba16": (16, 6),
-    "palette": (8, 3), "palette_trns": (8, 3),
+    "palette": (8, 3), "palette_trns": (8, 3), "palette2": (2, 3),
+    "palette_short": (8, 3),  # broken: index 1 inside, but a palette of one entry
 }
 
 
@@ -130,6 +133,11 @@ def good(kind, size, radius):
         data += chunk(b"PLTE", bytes([0, 0, 0, 255, 255, 255]))
         if kind == "palette_trns":
             data += chunk(b"tRNS", bytes([0, 255]))
+    elif kind == "palette2":  # 4 entries; the bright gray of entry 2 is never used
+        data += chunk(b"PLTE", bytes([0, 0, 0, 60, 60, 60, 200, 200, 200, 255, 255, 255]))
+        data += chunk(b"tRNS", bytes([255, 255, 0, 200]))
+    elif kind == "palette_short":
+        data += chunk(b"PLTE", bytes([0, 0, 0]))
     return data + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
 
 

@@ -82,7 +82,7 @@ for i in 1 2 3 4 5 6 7 8 9; do # tall: 9 discs; tall40: the same on 40x40
   png gray8 "tall/$i.png" 32 $((4 + i))
   png gray8 "tall40/$i.png" 40 $((4 + i))
 done
-for kind in text zero truncated no_iend bad_crc bad_idat_crc bad_zlib text_liar; do
+for kind in text zero truncated no_iend bad_crc bad_idat_crc bad_zlib text_liar palette_short; do
   png gray8 "b-$kind/1.png" 32 5
   png "$kind" "b-$kind/2.png" 32
 done
@@ -90,7 +90,7 @@ png gray8 sizes/1.png 32 5 && png gray8 sizes/2.png 32 7 && png gray8 sizes/3.pn
 png huge huge/1.png && png huge huge/2.png
 png huge_idat huge2/1.png && png huge_idat huge2/2.png
 png gray8 strip/1.png 20000x1 3 && png gray8 strip/2.png 20000x1 5
-KINDS="gray16 gray1 graya8 rgb8 rgb16 rgba8 rgba16 palette palette_trns interlaced text_chunks"
+KINDS="gray16 gray1 graya8 rgb8 rgb16 rgba8 rgba16 palette palette_trns palette2 interlaced text_chunks"
 for kind in $KINDS; do
   for i in 1 2 3; do png "$kind" "k-$kind/$i.png" 32 $((3 + 2 * i)); done
 done
@@ -122,6 +122,7 @@ broken no_iend "truncated PNG file"
 broken bad_crc "corrupt PNG: IHDR: CRC error"
 broken bad_idat_crc "corrupt PNG: IDAT: CRC error"
 broken bad_zlib "corrupt PNG"
+broken palette_short "corrupt PNG: pixel (13, 8) has palette index 1, but the palette has 1 entry"
 # a text chunk that claims 2 GB in a 44-byte file is skipped unread (libpng allocated the 2 GB
 # first); the address-space cap is left out under AddressSanitizer, which reserves terabytes
 if grep -q -a "__asan_init" "$LSM"; then
@@ -346,6 +347,31 @@ sys.exit(not (j["held_out"] == 1 and j["hd95_pooled"] is None and j["volume_erro
 else
   bad "score of empty slices: exit $rc, not strict JSON with nulls: $(cat "$TMP/stdout" "$TMP/stderr")"
 fi
+
+# ---- closed standard streams, and standard output that cannot be written -----------------------------------
+# with stderr closed, the first file opened would take descriptor 2 and the progress lines would land in it
+"$LSM" reconstruct good -o fd-ref --no-preview >/dev/null 2>&1 &&
+  "$LSM" reconstruct good -o fd-closed --no-preview >/dev/null 2>&- </dev/null
+rc=$?
+if [ $rc -eq 0 ] && cmp -s fd-ref/volume.nrrd fd-closed/volume.nrrd; then ok; else
+  bad "stderr closed: exit $rc, or volume.nrrd differs from a run with stderr open"
+fi
+if [ -w /dev/full ]; then
+  for args in "--help" "--version" "help score" "devices"; do
+    # shellcheck disable=SC2086 # the words are the arguments
+    "$LSM" $args >/dev/full 2>"$TMP/stderr"
+    rc=$?
+    if [ $rc -eq 1 ] && grep -q "^lsmorph: error: standard output: write failed" "$TMP/stderr"; then ok; else
+      # devices without OpenCL fails before writing anything
+      if [ "$args" = devices ] && grep -q "OpenCL" "$TMP/stderr"; then ok; else
+        bad "lsmorph $args >/dev/full: exit $rc, $(cat "$TMP/stderr")"
+      fi
+    fi
+  done
+fi
+expect "empty --heights name" 2 "--heights: the file name is empty" out reconstruct good -o out --heights ""
+expect "empty TRUTH_DIR" 2 "score: TRUTH_DIR is empty" - score "" ref --stride 2
+expect "empty OUT_DIR of score" 2 "score: OUT_DIR is empty" - score good "" --stride 2
 
 # ---- write errors: a file-size limit makes write() fail with EFBIG ----------------------------------------------
 "$PY" "$TESTS/make_stack.py" med 6 128 || bad "make_stack.py med"

@@ -186,6 +186,23 @@ static void test_list_devices(void **state) {
   assert_non_null(strstr(buf, "  0: "));
   assert_non_null(strstr(buf, "compute unit"));
   assert_non_null(strstr(buf, "global memory"));
+  /* one device is marked the default, and it is the one opened without --device */
+  const char *mark = strstr(buf, ", the default\n");
+  assert_non_null(mark);
+  assert_null(strstr(mark + 1, ", the default"));
+  const char *line = mark;
+  while (line > buf && line[-1] != '\n') --line;
+  const char *name = strstr(line, ": ");
+  assert_non_null(name);
+  name += 2;
+  const char *name_end = strstr(name, " (");
+  assert_true(name_end && name_end < mark);
+  lsm_backend *b = NULL;
+  assert_int_equal(lsm_backend_open(LSM_BACKEND_OPENCL, -1, 1, &b, &err), LSM_OK);
+  char want[256];
+  snprintf(want, sizeof want, "%.*s", (int)(name_end - name), name);
+  if (!strstr(b->device, want)) fail_msg("default device '%s', opened '%s'", want, b->device);
+  lsm_backend_close(&b);
   free(buf);
 }
 
