@@ -21,14 +21,15 @@ struct lsm_mesh {
   int nx, ny;           /* slice size */
   int w, h;             /* padded plane size: nx + 2, ny + 2 */
   size_t plane_n;       /* w * h */
-  double sx, sy, dz_pad;
+  double sx, sy, dz_pad; /* dz_pad 0: the step to the neighbouring slice */
   float *plane[RING];   /* padded planes, slot p % RING */
   double pz[RING];      /* their heights */
   long top;             /* highest plane built, -1 before the first slice */
   int32_t *eplane[2][3]; /* in-plane edge vertices, by plane parity: x, y, xy */
   int32_t *eslab[4];    /* slab edge vertices: z, xz, yz, xyz */
   size_t slices;
-  double last_z;
+  double last_z, prev_z; /* the last two heights added */
+  long pad_top;          /* the plane of the top pad once closing, else -1 */
   int closed;
   int failed;
   /* the mesh */
@@ -109,6 +110,29 @@ static void node_gradient(const lsm_mesh *m, int i, int j, long p, double g[3]) 
 #define DY(d) (((d) >> 1) & 1)
 #define DZ(d) (((d) >> 2) & 1)
 
+/* A node of the pad layer around the volume. */
+static inline int is_pad(const lsm_mesh *m, int i, int j, long p) {
+  return i == 0 || j == 0 || i == m->w - 1 || j == m->h - 1 || p == 0 || p == m->pad_top;
+}
+
+/* Where a vertex sits along its edge, as a fraction from node a (phi va) to
+ * node b (phi vb), one inside (phi <= 0), the other outside.  An edge into the
+ * pad layer is cut half-way, so the caps of an object cut by the volume's
+ * boundary are flat, at the faces of the boundary voxels, whatever the edge's
+ * direction.  Elsewhere the zero of the linear interpolant, kept 1/256 of the
+ * edge from its ends: a node where phi is exactly 0 (an outline's contour
+ * pixels, a blend's tie) would otherwise put the vertices of all its edges on
+ * one point, with triangles of no area. */
+static double edge_fraction(const lsm_mesh *m, int i, int j, long p, int i2, int j2, long p2,
+                            double va, double vb) {
+  if (is_pad(m, i, j, p) != is_pad(m, i2, j2, p2)) return 0.5;
+  const double least = 1.0 / 256.0;
+  double t = va / (va - vb);
+  if (!(t >= least)) t = least; /* also catches NaN */
+  if (t > 1.0 - least) t = 1.0 - least;
+  return t;
+}
+
 /* The vertex on the edge from node (i, j, plane p) to (i, j, p) + d; creates it. */
 static int32_t edge_vertex(lsm_mesh *m, int i, int j, long p, int d, int32_t *slot) {
   if (*slot >= 0) return *slot;
@@ -117,9 +141,7 @@ static int32_t edge_vertex(lsm_mesh *m, int i, int j, long p, int d, int32_t *sl
   const long p2 = p + DZ(d);
   const double va = plane_at(m, p)[(size_t)j * w + (size_t)i];
   const double vb = plane_at(m, p2)[(size_t)j2 * w + (size_t)i2];
-  double t = va / (va - vb);
-  if (!(t >= 0.0)) t = 0.0;
-  if (t > 1.0) t = 1.0;
+  const double t = edge_fraction(m, i, j, p, i2, j2, p2, va, vb);
   const double za = m->pz[p % RING], zb = m->pz[p2 % RING];
   const double xa = (i - 1) * m->sx, ya = (j - 1) * m->sy;
   const double xb = (i2 - 1) * m->sx, yb = (j2 - 1) * m->sy;
@@ -310,8 +332,10 @@ lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad, ls
   if (!out) return lsm_fail(err, LSM_ERR_INTERNAL, "mesh", "bad arguments");
   if (nx <= 0 || ny <= 0 || nx > INT32_MAX - 2 || ny > INT32_MAX - 2)
     return lsm_fail(err, LSM_ERR_INPUT, "mesh", "slice size %dx%d is not usable", nx, ny);
-  if (!(isfinite(sx) && sx > 0 && isfinite(sy) && sy > 0 && isfinite(dz_pad) && dz_pad > 0))
-    return lsm_fail(err, LSM_ERR_INPUT, "mesh", "spacings %g %g %g must be finite and positive",
+  if (!(isfinite(sx) && sx > 0 && isfinite(sy) && sy > 0 && isfinite(dz_pad) && dz_pad >= 0))
+    return lsm_fail(err, LSM_ERR_INPUT, "mesh",
+                    "spacings %g %g must be finite and positive, the pad distance %g finite and "
+                    "not negative",
                     sx, sy, dz_pad);
   size_t n;
   if (!lsm_size_mul((size_t)nx + 2, (size_t)ny + 2, &n) || n > (size_t)INT32_MAX)
@@ -327,6 +351,7 @@ lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad, ls
   m->sy = sy;
   m->dz_pad = dz_pad;
   m->top = -1;
+  m->pad_top = -1;
   int ok = 1;
   for (int k = 0; k < RING; ++k) ok &= (m->plane[k] = malloc(n * sizeof(float))) != NULL;
   for (int p = 0; p < 2; ++p)
@@ -362,16 +387,18 @@ lsm_status lsm_mesh_add_slice(lsm_mesh *m, const float *phi, double z, lsm_err *
     build_slice_plane(m, m->plane[1], phi);
     m->pz[1] = z;
     build_pad_plane(m, m->plane[0], m->plane[1]);
-    m->pz[0] = z - m->dz_pad;
+    m->pz[0] = z - (m->dz_pad > 0 ? m->dz_pad : m->sx); /* 0: set with the second slice */
     m->top = 1;
   } else {
     long p = (long)m->slices + 1;
     build_slice_plane(m, m->plane[p % RING], phi);
     m->pz[p % RING] = z;
     m->top = p;
+    if (m->slices == 1 && !(m->dz_pad > 0)) m->pz[0] = m->last_z - (z - m->last_z);
     mesh_slab(m, p - 2);
   }
   m->slices++;
+  m->prev_z = m->last_z;
   m->last_z = z;
   return mesh_status(m, err);
 }
@@ -383,8 +410,10 @@ lsm_status lsm_mesh_close(lsm_mesh *m, lsm_err *err) {
   if (m->slices == 0) return lsm_fail(err, LSM_ERR_INPUT, "mesh", "no slices were added");
   long p = (long)m->slices + 1;
   build_pad_plane(m, m->plane[p % RING], m->plane[(p - 1) % RING]);
-  m->pz[p % RING] = m->last_z + m->dz_pad;
+  const double step = m->dz_pad > 0 ? m->dz_pad : m->slices > 1 ? m->last_z - m->prev_z : m->sx;
+  m->pz[p % RING] = m->last_z + step;
   m->top = p;
+  m->pad_top = p;
   mesh_slab(m, p - 2);
   if (!m->failed) mesh_slab(m, p - 1);
   m->closed = 1;

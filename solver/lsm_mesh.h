@@ -18,9 +18,11 @@
  * The volume is padded with one outside layer on every side (the x and y
  * borders, one slice below the first and one above the last, pad spacing
  * dz_pad): a pad sample mirrors the nearest boundary sample, |phi| (at least a
- * tiny positive value), so an object cut by the volume's boundary is capped
- * half-way between the last samples and the pad: closed, at the faces of the
- * volume's voxels.
+ * tiny positive value), and every edge between the pad and the volume is cut
+ * half-way, so an object cut by the volume's boundary is capped flat, half-way
+ * between the last samples and the pad: closed, at the faces of the volume's
+ * voxels.  Elsewhere a vertex stays at least 1/256 of its edge from the edge's
+ * ends, so a node where phi is exactly 0 gives no triangles of zero area.
  *
  * Coordinates are physical: x = column * sx, y = row * sy, z = the slice's
  * height.  Memory: four padded slices and ten edge-index planes, plus the
@@ -37,7 +39,8 @@
 typedef struct lsm_mesh lsm_mesh;
 
 /* Starts a mesh of nx x ny slices with pixel spacings sx, sy; dz_pad is the
- * distance of the pad layers below the first and above the last slice. */
+ * distance of the pad layers below the first and above the last slice, or 0
+ * for the step to the neighbouring slice at each end (uneven heights). */
 lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad, lsm_mesh **out,
                          lsm_err *err);
 /* Adds the next slice (nx*ny floats, row-major, row 0 first) at height z;

@@ -854,8 +854,12 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     const double dz = cli->stack.dz > 0 ? cli->stack.dz : pixel;
     st = lsm_volume_writer_open(tmp, cli->formats, (lsm_values)cli->values, width, height, pixel,
                                 pixel, dz, 0.0, 0.0, z[0], &sink.volume, err);
+    /* the mesh caps an object cut by the first or last slice half a slice step
+     * beyond it: dz, or with --per-iteration (uneven heights, --dz unused) the
+     * step to the neighbouring slice */
     if (st == LSM_OK && cli->mesh)
-      st = lsm_mesh_open(width, height, pixel, pixel, dz, &sink.mesh, err);
+      st = lsm_mesh_open(width, height, pixel, pixel, cli->stack.per_iteration ? 0.0 : dz,
+                         &sink.mesh, err);
     if (st == LSM_OK && cli->preview)
       st = lsm_preview_open(width, height, pixel, pixel, dz, &sink.preview, err);
     if (st == LSM_OK) {

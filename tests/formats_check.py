@@ -6,11 +6,15 @@ Run with Debian's /usr/bin/python3 (python3-vtk9, python3-numpy).
       writes the slices k = 0, STRIDE, 2 STRIDE, ... < COUNT of a ball (radius R
       pixels, centre CX CY CZ in pixels / slice numbers) of SIZE x SIZE pixels
       as 8-bit PNGs DIR/slice_NNN.png (a tiny zlib PNG writer)
+  formats_check.py outline SRC DST
+      writes each ball slice of SRC as its 1-px outline in DST (--input outline)
   formats_check.py check OUT --spacing SX SY SZ --values sdf|mask
-                   [--mesh] [--ball R CX CY CZ] [--pixel P]
+                   [--mesh] [--caps] [--ball R CX CY CZ] [--pixel P]
       checks OUT (written with --format nrrd,mha,vtk,exr,raw and, with --mesh
-      or --ball, --mesh); SZ "auto": the mean step of heights.txt.  Prints
-      "ok - ..." or "FAIL - ..." per check.
+      or --ball, --mesh); SZ "auto": the mean step of heights.txt; --caps: the
+      object is cut by the first and last slices, so the mesh has flat caps
+      half a slice step beyond them.  Prints "ok - ..." or "FAIL - ..." per
+      check.
 """
 import json
 import math
@@ -87,7 +91,7 @@ def check(args):
     k = 1
     while k < len(args):
         name = args[k]
-        n = {"--spacing": 3, "--values": 1, "--ball": 4, "--pixel": 1, "--mesh": 0}[name]
+        n = {"--spacing": 3, "--values": 1, "--ball": 4, "--pixel": 1, "--mesh": 0, "--caps": 0}[name]
         opts[name] = args[k + 1:k + 1 + n]
         k += 1 + n
     values = opts["--values"][0]
@@ -243,6 +247,37 @@ def check(args):
     signed = float(np.einsum("ij,ij->i", p0, np.cross(p1, p2)).sum() / 6.0)
     report(mesh_volume > 0 and abs(signed - mesh_volume) <= 1e-3 * mesh_volume,
            "triangles wound outward: signed volume %.1f == %.1f" % (signed, mesh_volume))
+    # no triangle of zero area, no two vertices on one point: merged by position
+    # (VTK's clean filter, ParaView's Clean) the mesh is still manifold
+    area = 0.5 * np.linalg.norm(np.cross(p1 - p0, p2 - p0), axis=1)
+    report(int((area <= 0).sum()) == 0, "no triangle of zero area (found %d)" % int((area <= 0).sum()))
+    shared = len(pts) - len(np.unique(pts, axis=0))
+    report(shared == 0, "no two vertices at one position (found %d)" % shared)
+    clean = vtk.vtkCleanPolyData()
+    clean.SetInputData(mesh)
+    clean.SetTolerance(0.0)
+    clean.Update()
+    edges.SetInputData(clean.GetOutput())
+    edges.Update()
+    n_bad = edges.GetOutput().GetNumberOfCells()
+    report(n_bad == 0, "merged by position, surface.ply has no open or non-manifold edges (found %d)" % n_bad)
+    # inside the volume's voxels: x, y within half a pixel of the samples, z within
+    # half a slice step beyond the first and last slices (a cut object's caps)
+    sx, sy = spacing[0], spacing[1]
+    z_lo = heights[0] - 0.5 * (heights[1] - heights[0]) if nz > 1 else heights[0] - 0.5 * spacing[2]
+    z_hi = heights[-1] + 0.5 * (heights[-1] - heights[-2]) if nz > 1 else heights[-1] + 0.5 * spacing[2]
+    lo = np.array([-0.5 * sx, -0.5 * sy, z_lo]) - 1e-4 * np.array([sx, sy, sx])
+    hi = np.array([(nx - 0.5) * sx, (ny - 0.5) * sy, z_hi]) + 1e-4 * np.array([sx, sy, sx])
+    outside = int(((pts < lo) | (pts > hi)).any(axis=1).sum())
+    report(outside == 0, "mesh vertices inside the voxels' box %s .. %s (%d outside)" % (lo, hi, outside))
+    if "--caps" in opts:  # the object is cut by the first and last slices: flat caps there
+        zmin, zmax = pts[:, 2].min(), pts[:, 2].max()
+        flat_lo = np.abs(pts[:, 2] - z_lo) <= 1e-4 * sx
+        flat_hi = np.abs(pts[:, 2] - z_hi) <= 1e-4 * sx
+        report(abs(zmin - z_lo) <= 1e-4 * sx and abs(zmax - z_hi) <= 1e-4 * sx and flat_lo.sum() > 8
+               and flat_hi.sum() > 8,
+               "caps half a slice step beyond the first and last slices: z %.4f .. %.4f, want %.4f .. %.4f "
+               "(%d and %d vertices on them)" % (zmin, zmax, z_lo, z_hi, flat_lo.sum(), flat_hi.sum()))
     if "--ball" not in opts:
         return
     # ---- the ball: isosurface volume against the ball's and the mesh's ----
@@ -278,9 +313,39 @@ def check(args):
     del controller
 
 
+def outline(args):
+    """outline SRC DST: each mask of SRC (as make_ball writes them: 8-bit gray,
+    filter 0) as its inner boundary, 1 px thick and 8-connected, in DST."""
+    import numpy as np
+    src, dst = args
+    os.makedirs(dst, exist_ok=True)
+    for name in sorted(os.listdir(src)):
+        if not name.endswith(".png"):
+            continue
+        data = open(os.path.join(src, name), "rb").read()
+        pos, idat, w, h = 8, b"", 0, 0
+        while pos < len(data):
+            n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+            body = data[pos + 8:pos + 8 + n]
+            if kind == b"IHDR":
+                w, h = struct.unpack(">II", body[:8])
+            elif kind == b"IDAT":
+                idat += body
+            pos += 12 + n
+        raw = np.frombuffer(zlib.decompress(idat), dtype=np.uint8).reshape(h, w + 1)
+        m = raw[:, 1:] > 127
+        pad = np.pad(m, 1)
+        interior = pad[1:-1, 1:-1] & pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:]
+        edge = m & ~interior
+        write_png(os.path.join(dst, name), [bytes(255 if v else 0 for v in row) for row in edge], w, h)
+    return 0
+
+
 def main(argv):
     if len(argv) >= 2 and argv[1] == "ball":
         return make_ball(argv[2:])
+    if len(argv) >= 2 and argv[1] == "outline":
+        return outline(argv[2:])
     if len(argv) >= 2 and argv[1] == "check":
         try:
             check(argv[2:])

@@ -87,7 +87,22 @@ check "per-iteration slices written" "$PY" "$HELPER" ball "$TMP/pi" 64 41 8 24 3
 rc=$?
 check "reconstruct --per-iteration exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
-  run_checks "$TMP/check3" "$PY" "$HELPER" check "$TMP/piout" --spacing 0.5 0.5 auto --values sdf --mesh
+  run_checks "$TMP/check3" "$PY" "$HELPER" check "$TMP/piout" --spacing 0.5 0.5 auto --values sdf --mesh \
+    --caps
+fi
+# --dz does nothing with --per-iteration: not to the mesh either (its caps are half a slice step out)
+"$LSM" reconstruct "$TMP/pi" -o "$TMP/piout2" --spacing 8 --pixel-size 0.5 --per-iteration --dz 5 \
+  --mesh --no-slices --no-preview -q >"$TMP/log" 2>&1
+check "--per-iteration --dz 5 gives the same mesh" cmp -s "$TMP/piout/surface.ply" "$TMP/piout2/surface.ply"
+
+# ---- outlines: phi is exactly 0 on the contour pixels; the mesh has no degenerate triangles --------
+check "outline slices written" "$PY" "$HELPER" outline "$TMP/pi" "$TMP/pi-outline"
+"$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olout" --input outline --spacing 8 \
+  --format nrrd,mha,vtk,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+rc=$?
+check "reconstruct --input outline --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+if [ $rc -eq 0 ]; then
+  run_checks "$TMP/check4" "$PY" "$HELPER" check "$TMP/olout" --spacing 1 1 1 --values sdf --mesh --caps
 fi
 
 # ---- defaults: volume.nrrd and the previews only; --no-preview ------------------------------
