@@ -35,17 +35,24 @@
 LSM_FN float lsm_maxf(float a, float b) { return a > b ? a : b; }
 LSM_FN float lsm_minf(float a, float b) { return a < b ? a : b; }
 
-/* ---- First-order Godunov upwind (Osher & Sethian 1988) ------------------------
- * Numerical Hamiltonian for F |grad phi| with the speed F known at the cell:
- *   F > 0: |grad phi|^2 ~ max(dxm,0)^2 + min(dxp,0)^2 + max(dym,0)^2 + min(dyp,0)^2
- *   F < 0: |grad phi|^2 ~ min(dxm,0)^2 + max(dxp,0)^2 + min(dym,0)^2 + max(dyp,0)^2 */
+/* ---- First-order Godunov upwind (Rouy & Tourin 1992; Osher & Fedkiw ch. 6) -----
+ * Numerical Hamiltonian for F |grad phi| with the speed F known at the cell,
+ * per axis the larger of the two upwind one-sided slopes:
+ *   F > 0: |grad phi|^2 ~ max(max(dxm,0)^2, min(dxp,0)^2) + (the same in y)
+ *   F < 0: |grad phi|^2 ~ max(min(dxm,0)^2, max(dxp,0)^2) + (the same in y)
+ * (Osher & Sethian's 1988 form adds the two squares instead; at a peak or
+ * ridge of phi that moves it up to sqrt 2 faster in each axis, and under the
+ * CFL step below (cfl 0.75) a one-cell peak then overshoots below all its
+ * neighbours: not monotone.  With the max, each cell's update is a convex
+ * combination of its old value and its upwind neighbours for cfl <= 1: phi
+ * never leaves the range of its previous values, as the PDE's solution.) */
 LSM_FN float lsm_upwind_hamiltonian(float F, float dxm, float dxp, float dym, float dyp) {
   float ax = lsm_maxf(dxm, 0.0f), bx = lsm_minf(dxp, 0.0f);
   float ay = lsm_maxf(dym, 0.0f), by = lsm_minf(dyp, 0.0f);
   float cx = lsm_minf(dxm, 0.0f), ex = lsm_maxf(dxp, 0.0f);
   float cy = lsm_minf(dym, 0.0f), ey = lsm_maxf(dyp, 0.0f);
-  float grad2_pos = ax * ax + bx * bx + ay * ay + by * by;
-  float grad2_neg = cx * cx + ex * ex + cy * cy + ey * ey;
+  float grad2_pos = lsm_maxf(ax * ax, bx * bx) + lsm_maxf(ay * ay, by * by);
+  float grad2_neg = lsm_maxf(cx * cx, ex * ex) + lsm_maxf(cy * cy, ey * ey);
   /* One square root of the chosen side (the same value as choosing between
    * two roots: the root is correctly rounded). */
   return F * LSM_SQRT(F > 0.0f ? grad2_pos : grad2_neg);
@@ -54,7 +61,12 @@ LSM_FN float lsm_upwind_hamiltonian(float F, float dxm, float dxp, float dym, fl
 /* ---- CFL rate (METHOD.md §3.4) --------------------------------------------------
  * max over the four one-sided combinations (p in {dxm,dxp}, q in {dym,dyp}) of
  *   |H1|/dx + |H2|/dy = |F| (|p|/dx + |q|/dy) / |(p,q)|.
- * The stable step is dt = cfl / max over the grid of this rate. */
+ * The step is dt = cfl / max over the grid of this rate.  For the Godunov
+ * upwind above it is the monotone bound for cfl <= 1: the update's weight on a
+ * cell's own value is 1 - dt |F| (|p|/dx + |q|/dy) / |(p,q)| for the pair it
+ * takes.  Roe-Fix's Lax–Friedrichs branches weigh it by up to dt (alpha_x/dx +
+ * alpha_y/dy), alpha up to |F|: above about cfl 0.8 the document's rule let
+ * it grow without bound on 1-px stripes (README, --cfl). */
 LSM_FN float lsm_cfl_pair(float p, float q, float inv_dx, float inv_dy) {
   float g = LSM_SQRT(p * p + q * q);
   return g > 0.0f ? (LSM_FABS(p) * inv_dx + LSM_FABS(q) * inv_dy) / g : 0.0f;

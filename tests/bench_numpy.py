@@ -24,10 +24,10 @@ def step(phi):
     dym = c - p[:-2, 1:-1]
     dyp = p[2:, 1:-1] - c
     F = c - target
-    gpos = np.sqrt(np.maximum(dxm, 0) ** 2 + np.minimum(dxp, 0) ** 2 +
-                   np.maximum(dym, 0) ** 2 + np.minimum(dyp, 0) ** 2)
-    gneg = np.sqrt(np.minimum(dxm, 0) ** 2 + np.maximum(dxp, 0) ** 2 +
-                   np.minimum(dym, 0) ** 2 + np.maximum(dyp, 0) ** 2)
+    gpos = np.sqrt(np.maximum(np.maximum(dxm, 0) ** 2, np.minimum(dxp, 0) ** 2) +
+                   np.maximum(np.maximum(dym, 0) ** 2, np.minimum(dyp, 0) ** 2))
+    gneg = np.sqrt(np.maximum(np.minimum(dxm, 0) ** 2, np.maximum(dxp, 0) ** 2) +
+                   np.maximum(np.minimum(dym, 0) ** 2, np.maximum(dyp, 0) ** 2))
     H = np.where(F > 0, F * gpos, F * gneg)
     return c - dt * H
 

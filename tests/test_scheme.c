@@ -114,15 +114,15 @@ static void test_upwind_linear(void **state) {
   assert_close(lsm_upwind_hamiltonian(0.0f, -1.0f, 2.0f, 3.0f, -4.0f), 0.0, 0.0);
 }
 
-/* Kinks.  Osher–Sethian (1988):
- *   F > 0: |grad|^2 = max(dxm,0)^2 + min(dxp,0)^2 + max(dym,0)^2 + min(dyp,0)^2
- *   F < 0: |grad|^2 = min(dxm,0)^2 + max(dxp,0)^2 + min(dym,0)^2 + max(dyp,0)^2
+/* Kinks.  Godunov (Rouy–Tourin), per axis the larger upwind slope:
+ *   F > 0: |grad|^2 = max(max(dxm,0)^2, min(dxp,0)^2) + the same in y
+ *   F < 0: |grad|^2 = max(min(dxm,0)^2, max(dxp,0)^2) + the same in y
  * V-shaped minimum in x (dxm < 0 < dxp), flat in y:
  *   F > 0 (phi decreasing, the minimum is an outflow point): every term is 0,
  *         so the upwind gradient is 0 and H = 0.
- *   F < 0: both sides are upwind, |grad|^2 = dxm^2 + dxp^2 (the Osher–Sethian
- *         sum; the Godunov/Rouy–Tourin variant would take max(dxm^2, dxp^2)
- *         instead).  Either way |H| >= |F| max(|dxm|, |dxp|).
+ *   F < 0: both sides are upwind, |grad|^2 = max(dxm^2, dxp^2) (Osher and
+ *         Sethian's 1988 sum dxm^2 + dxp^2 would move the kink faster than
+ *         the steeper side's characteristic: not monotone).
  * A Λ-shaped maximum (dxm > 0 > dxp) is the mirror image. */
 static void test_upwind_kinks(void **state) {
   (void)state;
@@ -130,19 +130,18 @@ static void test_upwind_kinks(void **state) {
   const float dxm = -1.5f, dxp = 0.5f;
   assert_close(lsm_upwind_hamiltonian(2.0f, dxm, dxp, 0.0f, 0.0f), 0.0, 0.0);
   const double vneg = lsm_upwind_hamiltonian(-2.0f, dxm, dxp, 0.0f, 0.0f);
-  assert_close(vneg, -2.0 * sqrt(1.5 * 1.5 + 0.5 * 0.5), 1e-6);
-  assert_true(fabs(vneg) >= 2.0 * 1.5 - 1e-6);
+  assert_close(vneg, -2.0 * 1.5, 1e-6);
   /* Λ maximum: the mirror image. */
   assert_close(lsm_upwind_hamiltonian(-2.0f, 1.5f, -0.5f, 0.0f, 0.0f), 0.0, 0.0);
-  assert_close(lsm_upwind_hamiltonian(2.0f, 1.5f, -0.5f, 0.0f, 0.0f),
-               2.0 * sqrt(1.5 * 1.5 + 0.5 * 0.5), 1e-6);
+  assert_close(lsm_upwind_hamiltonian(2.0f, 1.5f, -0.5f, 0.0f, 0.0f), 2.0 * 1.5, 1e-6);
+  assert_close(lsm_upwind_hamiltonian(2.0f, 0.5f, -1.5f, 0.0f, 0.0f), 2.0 * 1.5, 1e-6);
   /* V in x, linear in y (slope 0.75): F > 0 keeps only the y part. */
   assert_close(lsm_upwind_hamiltonian(3.0f, dxm, dxp, 0.75f, 0.75f), 3.0 * 0.75, 1e-6);
   assert_close(lsm_upwind_hamiltonian(-3.0f, dxm, dxp, 0.75f, 0.75f),
-               -3.0 * sqrt(1.5 * 1.5 + 0.5 * 0.5 + 0.75 * 0.75), 1e-6);
+               -3.0 * sqrt(1.5 * 1.5 + 0.75 * 0.75), 1e-6);
   /* Cone minimum (centre of a disc's SDF, dx = dy = 1): V in both axes. */
   assert_close(lsm_upwind_hamiltonian(1.0f, -1.0f, 1.0f, -1.0f, 1.0f), 0.0, 0.0);
-  assert_close(lsm_upwind_hamiltonian(-1.0f, -1.0f, 1.0f, -1.0f, 1.0f), -2.0, 1e-6);
+  assert_close(lsm_upwind_hamiltonian(-1.0f, -1.0f, 1.0f, -1.0f, 1.0f), -sqrt(2.0), 1e-6);
   /* One-sided slope choice away from kinks: phi increasing in x with different
    * slopes on each side: F > 0 takes the backward difference, F < 0 the forward. */
   assert_close(lsm_upwind_hamiltonian(1.0f, 0.5f, 2.0f, 0.0f, 0.0f), 0.5, 1e-6);
@@ -445,7 +444,7 @@ static void test_roefix_random_vs_reference(void **state) {
 }
 
 /* Linear data (all differences equal): Roe-Fix is pure upwind and equals the
- * Osher–Sethian upwind Hamiltonian, F sqrt(a^2 + b^2). */
+ * Godunov upwind Hamiltonian, F sqrt(a^2 + b^2). */
 static void test_roefix_linear_equals_upwind(void **state) {
   (void)state;
   uint64_t rng = 42;
@@ -533,7 +532,7 @@ static void test_stage_vs_cell_reference(void **state) {
 
 /* At the apex of a cone (a cell at the centre of a disc's SDF: differences
  * -1 | +1 in both axes), F = -4:
- *   upwind (Osher–Sethian, F < 0): |grad|^2 = 1 + 1 + 1 + 1 -> H = -8;
+ *   upwind (Godunov, F < 0): |grad|^2 = max(1, 1) + max(1, 1) -> H = -4 sqrt 2;
  *   Roe-Fix: both H1 and H2 change sign (LLF_XY), phi_x* = phi_y* = 0,
  *     alpha_x = alpha_y = |F| * 1/sqrt(1 + 1) (all other differences on the
  *     row and column are +-1), Hhat = -alpha_x - alpha_y = -4 sqrt 2. */
@@ -547,9 +546,61 @@ static void test_roefix_cone_apex(void **state) {
   fill_circle(tgt, 0.5, 0.5, 4.0, 1.0);
   const float dt = 0.1f;
   lsm_scheme_stage(LSM_SCHEME_UPWIND, out, phi, phi, tgt, 0.0f, 1.0f, dt, 1);
-  assert_close(LSM_AT(out, 16, 16), -8.0 - dt * -8.0, 1e-5);
+  assert_close(LSM_AT(out, 16, 16), -8.0 - dt * -4.0 * sqrt(2.0), 1e-5);
   lsm_scheme_stage(LSM_SCHEME_ROEFIX, out, phi, phi, tgt, 0.0f, 1.0f, dt, 1);
   assert_close(LSM_AT(out, 16, 16), -8.0 - dt * -4.0 * sqrt(2.0), 1e-5);
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+  lsm_grid_destroy(&out);
+}
+
+/* The upwind step under the CFL step of §3.4 is monotone for cfl <= 1: phi
+ * never leaves the range of its previous values (the PDE's maximum
+ * principle).  A one-cell peak and a one-cell pit, F = phi - 0 = +-1 there:
+ * the sum form of Osher and Sethian took the peak to 1 - 0.75 * 2 / sqrt 2 =
+ * -0.06 at cfl 0.75, below every neighbour.  Also 1-px stripes, F of both
+ * signs, 200 steps at cfl 0.99, each with the CFL step of the phi it starts
+ * from (a step fixed from phi_0, as the morph keeps it, can exceed the bound
+ * of a later phi). */
+static void test_upwind_monotone(void **state) {
+  (void)state;
+  const float cfls[] = {0.75f, 0.99f};
+  for (size_t c = 0; c < 2; ++c)
+    for (int sign = -1; sign <= 1; sign += 2) {
+      lsm_grid *phi = new_grid(9, 9, 1.0f, 1.0f), *tgt = new_grid(9, 9, 1.0f, 1.0f);
+      lsm_grid *out = new_grid(9, 9, 1.0f, 1.0f);
+      LSM_AT(phi, 4, 4) = (float)sign;
+      double dt;
+      lsm_cfl_dt(phi, tgt, cfls[c], 1, &dt);
+      lsm_scheme_stage(LSM_SCHEME_UPWIND, out, phi, phi, tgt, 0.0f, 1.0f, (float)dt, 1);
+      const double v = LSM_AT(out, 4, 4);
+      if (!(sign > 0 ? v >= 0.0 && v <= 1.0 : v <= 0.0 && v >= -1.0))
+        fail_msg("cfl %g, peak %+d: %g left [min, max] of the old values", cfls[c], sign, v);
+      lsm_grid_destroy(&phi);
+      lsm_grid_destroy(&tgt);
+      lsm_grid_destroy(&out);
+    }
+  const int n = 40;
+  lsm_grid *phi = new_grid(n, n, 1.0f, 1.0f), *tgt = new_grid(n, n, 1.0f, 1.0f);
+  lsm_grid *out = new_grid(n, n, 1.0f, 1.0f);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      LSM_AT(phi, i, j) = i % 2 ? -0.5f : 0.5f;
+      const double r = hypot(i - 32.0, j - 13.0);
+      LSM_AT(tgt, i, j) = (float)(r - 4.7);
+    }
+  const float lo = lsm_grid_min(phi), hi = lsm_grid_max(phi);
+  for (int step = 0; step < 200; ++step) {
+    double dt; /* the step of the current phi: the bound holds step by step */
+    lsm_cfl_dt(phi, tgt, 0.99, 1, &dt);
+    lsm_scheme_stage(LSM_SCHEME_UPWIND, out, phi, phi, tgt, 0.0f, 1.0f, (float)dt, 1);
+    lsm_grid *t = phi;
+    phi = out;
+    out = t;
+    if (!(lsm_grid_min(phi) >= lo - 1e-6f && lsm_grid_max(phi) <= hi + 1e-6f))
+      fail_msg("step %d: phi in [%g, %g], left [%g, %g]", step, lsm_grid_min(phi),
+               lsm_grid_max(phi), lo, hi);
+  }
   lsm_grid_destroy(&phi);
   lsm_grid_destroy(&tgt);
   lsm_grid_destroy(&out);
@@ -919,6 +970,7 @@ int main(void) {
       cmocka_unit_test(test_roefix_linear_equals_upwind),
       cmocka_unit_test(test_stage_vs_cell_reference),
       cmocka_unit_test(test_roefix_cone_apex),
+      cmocka_unit_test(test_upwind_monotone),
       cmocka_unit_test(test_integrators_agree),
       cmocka_unit_test(test_front_measure),
       cmocka_unit_test(test_circles_upwind),
