@@ -872,7 +872,7 @@ static lsm_status reduce(cl_state *s, cl_kernel k, cl_uint first_local, lsm_err 
   return LSM_OK;
 }
 
-static lsm_status cl_cfl_dt(void *vs, double cfl, double *dt, lsm_err *err) {
+static lsm_status cl_cfl_dt(void *vs, lsm_scheme scheme, double cfl, double *dt, lsm_err *err) {
   cl_state *s = vs;
   const float inv_dx = 1.0f / s->dx, inv_dy = 1.0f / s->dy;
   LSM_TRY(fill_ghosts(s, s->phi, err));
@@ -885,7 +885,9 @@ static lsm_status cl_cfl_dt(void *vs, double cfl, double *dt, lsm_err *err) {
   ARG(k, 5, s->c->red_run);
   ARG(k, 6, inv_dx);
   ARG(k, 7, inv_dy);
-  LSM_TRY(reduce(s, k, 8, err));
+  const cl_int roefix = scheme == LSM_SCHEME_ROEFIX;
+  ARG(k, 8, roefix);
+  LSM_TRY(reduce(s, k, 9, err));
   float rate = 0.0f;
   for (size_t q = 0; q < s->npartial; ++q)
     rate = s->partial_host[q] > rate ? s->partial_host[q] : rate;

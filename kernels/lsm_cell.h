@@ -59,14 +59,19 @@ LSM_FN float lsm_upwind_hamiltonian(float F, float dxm, float dxp, float dym, fl
 }
 
 /* ---- CFL rate (METHOD.md §3.4) --------------------------------------------------
- * max over the four one-sided combinations (p in {dxm,dxp}, q in {dym,dyp}) of
+ * Upwind: max over the four one-sided combinations (p in {dxm,dxp}, q in
+ * {dym,dyp}) of
  *   |H1|/dx + |H2|/dy = |F| (|p|/dx + |q|/dy) / |(p,q)|.
- * The step is dt = cfl / max over the grid of this rate.  For the Godunov
+ * The step is dt = cfl / max over the grid of the rate.  For the Godunov
  * upwind above it is the monotone bound for cfl <= 1: the update's weight on a
  * cell's own value is 1 - dt |F| (|p|/dx + |q|/dy) / |(p,q)| for the pair it
- * takes.  Roe-Fix's Lax–Friedrichs branches weigh it by up to dt (alpha_x/dx +
- * alpha_y/dy), alpha up to |F|: above about cfl 0.8 the document's rule let
- * it grow without bound on 1-px stripes (README, --cfl). */
+ * takes.
+ * Roe-Fix: its Lax–Friedrichs branches weigh a cell's own value by up to
+ * dt (alpha_x/dx + alpha_y/dy), each alpha a max of |H1| or |H2| over widened
+ * sets, up to |F|; so its rate is |F| (1/dx + 1/dy), the largest |H1|/dx and
+ * |H2|/dy taken apart (Osher & Fedkiw's form of the condition), never below
+ * the pairwise rate.  With the pairwise rate (the document's reading of §3.4)
+ * Roe-Fix grew without bound above about cfl 0.8 on 1-px stripes. */
 LSM_FN float lsm_cfl_pair(float p, float q, float inv_dx, float inv_dy) {
   float g = LSM_SQRT(p * p + q * q);
   return g > 0.0f ? (LSM_FABS(p) * inv_dx + LSM_FABS(q) * inv_dy) / g : 0.0f;
@@ -78,6 +83,13 @@ LSM_FN float lsm_cfl_rate(float F, float dxm, float dxp, float dym, float dyp, f
                      lsm_maxf(lsm_cfl_pair(dxp, dym, inv_dx, inv_dy),
                               lsm_cfl_pair(dxp, dyp, inv_dx, inv_dy)));
   return LSM_FABS(F) * r;
+}
+
+/* The rate of a scheme: roefix 0 (upwind) or 1 (Roe-Fix). */
+LSM_FN float lsm_cfl_rate_of(int roefix, float F, float dxm, float dxp, float dym, float dyp,
+                             float inv_dx, float inv_dy) {
+  return roefix ? LSM_FABS(F) * (inv_dx + inv_dy)
+                : lsm_cfl_rate(F, dxm, dxp, dym, dyp, inv_dx, inv_dy);
 }
 
 /* ---- Roe-Fix (Osher & Fedkiw ch. 5.3; the design document's Algorithm 3.1) -------

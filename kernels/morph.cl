@@ -200,9 +200,9 @@ __kernel void lsm_reinit_step(__global float *next, __global const float *phi,
   } while (0)
 #endif
 
-/* max over the interior of lsm_cfl_rate (phi's ghosts filled). */
+/* max over the interior of lsm_cfl_rate_of (phi's ghosts filled). */
 __kernel void lsm_cfl_partial(__global const float *phi, __global const float *target, int nx,
-                              int ny, int stride, int run, float inv_dx, float inv_dy,
+                              int ny, int stride, int run, float inv_dx, float inv_dy, int roefix,
                               __local float *scratch, __global float *partial) {
   const int lid = (int)(get_local_id(1) * get_local_size(0) + get_local_id(0));
   const int n = (int)(get_local_size(0) * get_local_size(1));
@@ -213,9 +213,9 @@ __kernel void lsm_cfl_partial(__global const float *phi, __global const float *t
     for (int i = i0; i < i1; ++i) {
       const int k = b + i;
       const float c = phi[k];
-      const float r = lsm_cfl_rate(c - target[k], (c - phi[k - 1]) * inv_dx,
-                                   (phi[k + 1] - c) * inv_dx, (c - phi[k - stride]) * inv_dy,
-                                   (phi[k + stride] - c) * inv_dy, inv_dx, inv_dy);
+      const float r = lsm_cfl_rate_of(roefix, c - target[k], (c - phi[k - 1]) * inv_dx,
+                                      (phi[k + 1] - c) * inv_dx, (c - phi[k - stride]) * inv_dy,
+                                      (phi[k + stride] - c) * inv_dy, inv_dx, inv_dy);
       rate = lsm_maxf(rate, r);
     }
   }

@@ -56,7 +56,7 @@ typedef struct lsm_backend_ops {
   lsm_status (*create)(void *ctx, const lsm_grid *phi_source, const lsm_grid *phi_target,
                        int threads, void **state, lsm_err *err);
   /* dt = cfl / max(|H1|/dx + |H2|/dy) on the current phi (METHOD.md §3.4). */
-  lsm_status (*cfl_dt)(void *state, double cfl, double *dt, lsm_err *err);
+  lsm_status (*cfl_dt)(void *state, lsm_scheme scheme, double cfl, double *dt, lsm_err *err);
   /* One step of size dt with the scheme and integrator; hook (may be NULL)
    * sees each stage's input field (backends that cannot, return
    * LSM_ERR_UNSUPPORTED when hook is not NULL). */

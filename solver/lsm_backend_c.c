@@ -44,10 +44,11 @@ static lsm_status c_create(void *ctx, const lsm_grid *phi_source, const lsm_grid
   return LSM_OK;
 }
 
-static lsm_status c_cfl_dt(void *state, double cfl, double *dt, lsm_err *err) {
+static lsm_status c_cfl_dt(void *state, lsm_scheme scheme, double cfl, double *dt,
+                           lsm_err *err) {
   (void)err;
   c_state *s = state;
-  lsm_cfl_dt(s->phi, s->phi_target, cfl, s->threads, dt);
+  lsm_cfl_dt(s->phi, s->phi_target, scheme, cfl, s->threads, dt);
   return LSM_OK;
 }
 

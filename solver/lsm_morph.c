@@ -98,7 +98,7 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
     m->pls_stats = *lsm_pls_stats_get(m->pls);
     m->pls_live = (long long)set.n;
   }
-  if (st == LSM_OK) st = m->ops->cfl_dt(m->state, opts->cfl, &m->dt, err);
+  if (st == LSM_OK) st = m->ops->cfl_dt(m->state, opts->scheme, opts->cfl, &m->dt, err);
   if (st == LSM_OK) st = morph_residual(m, &m->residual, err);
   if (st == LSM_OK && !isfinite(m->residual))
     st = lsm_fail(err, LSM_ERR_NUMERIC, NULL, "morph: the initial fields are not finite");
@@ -184,7 +184,7 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
      * from phi_target where it was clamped), so the CFL bound is taken again
      * and the step only ever shrinks. */
     double dt_now;
-    LSM_TRY(m->ops->cfl_dt(m->state, m->opts.cfl, &dt_now, err));
+    LSM_TRY(m->ops->cfl_dt(m->state, m->opts.scheme, m->opts.cfl, &dt_now, err));
     if (dt_now < m->dt) m->dt = dt_now;
   }
   if (m->opts.track_cp || m->iterations % 16 == 0) {

@@ -35,9 +35,10 @@ int lsm_time_stages(lsm_time time) {
 
 /* ---- CFL ------------------------------------------------------------------------ */
 
-void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, double cfl, int threads,
-                double *dt) {
+void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
+                int threads, double *dt) {
   lsm_grid_fill_ghosts(phi);
+  const int roefix = scheme == LSM_SCHEME_ROEFIX;
   const float inv_dx = 1.0f / phi->dx, inv_dy = 1.0f / phi->dy;
   float rate = 0.0f;
 #pragma omp parallel for num_threads(lsm_grid_threads(phi, threads)) schedule(static) reduction(max : rate)
@@ -46,8 +47,9 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, double cfl, int threa
     const float *t = &LSM_AT(phi_target, 0, j);
     float row_rate = 0.0f;
     for (int i = 0; i < phi->nx; ++i) {
-      float r = lsm_cfl_rate(c[i] - t[i], (c[i] - c[i - 1]) * inv_dx, (c[i + 1] - c[i]) * inv_dx,
-                             (c[i] - dn[i]) * inv_dy, (up[i] - c[i]) * inv_dy, inv_dx, inv_dy);
+      float r = lsm_cfl_rate_of(roefix, c[i] - t[i], (c[i] - c[i - 1]) * inv_dx,
+                                (c[i + 1] - c[i]) * inv_dx, (c[i] - dn[i]) * inv_dy,
+                                (up[i] - c[i]) * inv_dy, inv_dx, inv_dy);
       row_rate = lsm_maxf(row_rate, r);
     }
     rate = lsm_maxf(rate, row_rate);

@@ -36,11 +36,13 @@ lsm_time lsm_time_from_name(const char *name);
 /* Number of Hamiltonian evaluations per cell and step (1, 2, 3). */
 int lsm_time_stages(lsm_time time);
 
-/* Stable step dt = cfl / max over cells of (|H1|/dx + |H2|/dy), evaluated on
- * the four one-sided gradient combinations (METHOD.md §3.4).  Fills phi's
- * ghosts.  When the rate is 0 everywhere (phi == phi_target) *dt = +INFINITY. */
-void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, double cfl, int threads,
-                double *dt);
+/* The CFL step dt = cfl / max over cells of the scheme's rate (METHOD.md §3.4;
+ * kernels/lsm_cell.h, lsm_cfl_rate_of): upwind, |H1|/dx + |H2|/dy on the four
+ * one-sided gradient combinations; Roe-Fix, |F| (1/dx + 1/dy), which bounds its
+ * Lax–Friedrichs dissipation.  Monotone for cfl <= 1.  Fills phi's ghosts.
+ * When the rate is 0 everywhere (phi == phi_target) *dt = +INFINITY. */
+void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
+                int threads, double *dt);
 
 /* One Shu–Osher stage:  out = c0 * u0 + c1 * (in - dt * Hhat(in)).
  * out may alias u0 (cell-wise), never in.  Fills in's ghosts. */

@@ -830,11 +830,6 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     if (cli->stack.per_iteration && cli->stack.dz > 0)
       fprintf(stderr, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
                       "iteration is a slice)\n");
-    if (cli->stack.morph.scheme == LSM_SCHEME_ROEFIX && cli->stack.morph.cfl > 0.75)
-      fprintf(stderr, "lsmorph: note: --cfl %g with --scheme roe-fix: the CFL step does not "
-                      "bound Roe-Fix's Lax-Friedrichs dissipation above about 0.75 (it grew "
-                      "without bound at 0.8 on 1-px stripes): results may be wrong\n",
-              cli->stack.morph.cfl);
   }
   const int threads = setup_run(cli);
   lsm_backend *backend = NULL;

@@ -122,7 +122,7 @@ int main(int argc, char **argv) {
       return die(&err);
     fill(phi, target);
     double dt;
-    lsm_cfl_dt(phi, target, 0.75, 1, &dt);
+    lsm_cfl_dt(phi, target, LSM_SCHEME_UPWIND, 0.75, 1, &dt);
     const double cells = (double)n * n;
     int reps = (int)(4.0e8 / cells);
     if (reps < 5) reps = 5;

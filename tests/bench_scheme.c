@@ -42,7 +42,7 @@ int main(int argc, char **argv) {
           LSM_AT(target, i, j) = (float)(hypot(x - 0.1 * n, 1.5 * y) - 0.25 * n);
         }
       double dt;
-      lsm_cfl_dt(phi, target, 0.75, threads, &dt);
+      lsm_cfl_dt(phi, target, LSM_SCHEME_UPWIND, 0.75, threads, &dt);
       /* Five blocks of sweeps, about 0.06 s each at the upwind speed; the
        * fastest block counts. */
       long long cells = (long long)n * n;

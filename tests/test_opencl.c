@@ -297,7 +297,7 @@ static void test_plumbing(void **state) {
   double norm = -1.0, dt = 0.0;
   assert_int_equal(ops->residual(st, &norm, &err), LSM_OK);
   assert_true(norm == 0.0);
-  assert_int_equal(ops->cfl_dt(st, 0.75, &dt, &err), LSM_OK);
+  assert_int_equal(ops->cfl_dt(st, LSM_SCHEME_UPWIND, 0.75, &dt, &err), LSM_OK);
   assert_true(isinf(dt));
   /* Stage hooks are refused (phi is on the device); particles have their ops. */
   lsm_stage_hook hook = {NULL, NULL};
@@ -345,8 +345,11 @@ static void test_large_grid(void **state) {
   assert_int_equal(c_ops->create(NULL, src, dst, 1, &cs, &err), LSM_OK);
   assert_int_equal(cl_ops->create(fx.cl->ctx, src, dst, 1, &gs, &err), LSM_OK);
   double dt_c, dt_g, res_c, res_g;
-  assert_int_equal(c_ops->cfl_dt(cs, 0.75, &dt_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->cfl_dt(gs, 0.75, &dt_g, &err), LSM_OK);
+  assert_int_equal(c_ops->cfl_dt(cs, LSM_SCHEME_ROEFIX, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(cl_ops->cfl_dt(gs, LSM_SCHEME_ROEFIX, 0.75, &dt_g, &err), LSM_OK);
+  assert_true(dt_c == dt_g);
+  assert_int_equal(c_ops->cfl_dt(cs, LSM_SCHEME_UPWIND, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(cl_ops->cfl_dt(gs, LSM_SCHEME_UPWIND, 0.75, &dt_g, &err), LSM_OK);
   assert_true(dt_c == dt_g);
   for (int n = 0; n < 4; ++n) {
     assert_int_equal(c_ops->step(cs, LSM_SCHEME_UPWIND, LSM_TIME_RK3, (float)dt_c, NULL, &err), LSM_OK);
@@ -406,8 +409,8 @@ static void test_morph_matches_c(void **state) {
 
   double dt_c = 0.0, dt_g = 0.0, res_c = 0.0, res_g = 0.0;
   double worst_dt = 0.0, worst_res = 0.0, res0 = 0.0;
-  assert_int_equal(c_ops->cfl_dt(cs, 0.75, &dt_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->cfl_dt(gs, 0.75, &dt_g, &err), LSM_OK);
+  assert_int_equal(c_ops->cfl_dt(cs, mc->scheme, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(cl_ops->cfl_dt(gs, mc->scheme, 0.75, &dt_g, &err), LSM_OK);
   worst_dt = rel_diff(dt_c, dt_g);
   assert_int_equal(c_ops->residual(cs, &res0, &err), LSM_OK);
   assert_true(dt_c > 0.0 && isfinite(dt_c));
@@ -424,8 +427,8 @@ static void test_morph_matches_c(void **state) {
     if (r > worst_res) worst_res = r;
   }
   /* The CFL reduction on the evolved state as well. */
-  assert_int_equal(c_ops->cfl_dt(cs, 0.75, &dt_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->cfl_dt(gs, 0.75, &dt_g, &err), LSM_OK);
+  assert_int_equal(c_ops->cfl_dt(cs, mc->scheme, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(cl_ops->cfl_dt(gs, mc->scheme, 0.75, &dt_g, &err), LSM_OK);
   if (rel_diff(dt_c, dt_g) > worst_dt) worst_dt = rel_diff(dt_c, dt_g);
 
   assert_int_equal(c_ops->download(cs, ref, &err), LSM_OK);
