@@ -745,8 +745,25 @@ static void name_out_not_tmp(lsm_err *err, const char *tmp, const char *out_dir)
   memcpy(err->msg, msg, sizeof msg);
 }
 
-/* An MPI rank other than 0: computes its share of the gaps and sends them to
- * rank 0, which reads the same input, checks it, and writes everything. */
+/* A worker's transport: counts what it has sent to rank 0. */
+typedef struct counted_transport {
+  const lsm_gap_transport *inner;
+  size_t sent;
+} counted_transport;
+
+static lsm_status counted_send(void *ctx, size_t gap, const lsm_gap_result *result, lsm_err *err) {
+  counted_transport *c = ctx;
+  c->sent++;
+  return c->inner->send(c->inner->ctx, gap, result, err);
+}
+
+/* An MPI rank other than 0: computes its share of the gaps (gap i is rank
+ * i % size's) and sends them to rank 0, which reads the same input, checks it,
+ * and writes everything.  A worker that owns no gap has nothing to do.  One
+ * that fails before it has sent anything (its own view of the input: a
+ * --heights pipe that only rank 0 reads) sends the failure as its first gap,
+ * which rank 0 waits for: rank 0 reports it and ends the run, instead of
+ * waiting for ever. */
 static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *transport,
                                      lsm_err *err) {
   png_source src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
@@ -755,9 +772,17 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   lsm_pair_stats *stats = NULL;
   lsm_backend *backend = NULL;
   int width = 0, height = 0;
+  counted_transport counted = {transport, 0};
+  lsm_gap_transport mine = *transport;
+  mine.ctx = &counted;
+  mine.send = counted_send;
   lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, err);
   if (st == LSM_OK && src.count < 2)
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "need at least two PNG slices");
+  if (st == LSM_OK && (size_t)transport->rank >= src.count - 1) { /* no gap of its own */
+    lsm_path_list_free(src.paths, src.count);
+    return LSM_OK;
+  }
   if (st == LSM_OK) {
     if (cli->heights_file) {
       st = lsm_heights_read(cli->heights_file, &z, &nz, err);
@@ -776,7 +801,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
   if (st == LSM_OK) {
     cli->stack.morph.backend = backend;
-    cli->stack.transport = transport;
+    cli->stack.transport = &mine;
     stats = calloc(src.count, sizeof *stats);
     if (!stats) st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the run");
   }
@@ -784,6 +809,16 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   if (st == LSM_OK) {
     lsm_slice_source source = {&src, src.count, z, png_load, png_name};
     st = lsm_stack_run(&source, width, height, &cli->stack, NULL, stats, NULL, err);
+  }
+  if (st != LSM_OK && counted.sent == 0) {
+    lsm_gap_result failed;
+    memset(&failed, 0, sizeof failed);
+    failed.status = st;
+    failed.stats.rank = transport->rank;
+    snprintf(failed.msg, sizeof failed.msg, "%s", err->msg[0] ? err->msg : lsm_status_name(st));
+    lsm_err send_err;
+    lsm_err_clear(&send_err);
+    (void)transport->send(transport->ctx, (size_t)transport->rank, &failed, &send_err);
   }
   lsm_backend_close(&backend);
   free(stats);

@@ -2,7 +2,8 @@
 # MPI: gaps spread over ranks give the same result as one process, byte for
 # byte (volume, heights, slices), in default and per-iteration mode, for rank
 # counts that do not divide the gap count; a bad slice on another rank ends
-# every rank with one error and no result.  Builds the MPI variant (make MPI=1)
+# every rank with one error and no result, and so does a rank that fails before
+# it has computed anything (heights from a pipe only rank 0 reads).  Builds the MPI variant (make MPI=1)
 # into build-mpi/.  Argument: the normal build folder.
 set -u
 BUILD=${1:-build}
@@ -56,5 +57,19 @@ check "bad slice: exit 1" [ "$rc" -eq 1 ]
 check "bad slice: one clear error" grep -q "lsmorph: error: .*0004.png" "$TMP/err.txt"
 check "bad slice: no result" [ ! -e "$TMP/badout" ]
 check "bad slice: no temporary folder" sh -c "! ls -d '$TMP'/badout.tmp-* >/dev/null 2>&1"
+# heights from a pipe: mpirun gives standard input to rank 0 only, so rank 1 reads no heights
+# before it has computed anything; it must not leave rank 0 waiting for its gaps for ever
+seq 0 5 35 > "$TMP/h.txt"
+cat "$TMP/h.txt" | runn 2 "$TMP/in" -o "$TMP/pipeout" --heights /dev/stdin --threads 1 2> "$TMP/err.txt"
+rc=$?
+check "heights pipe, 2 ranks: exit 1, not a hang (got $rc)" [ "$rc" -eq 1 ]
+check "heights pipe: the worker's error is reported" grep -q "lsmorph: error: /dev/stdin: no heights" "$TMP/err.txt"
+check "heights pipe: no temporary folder" sh -c "! ls -d '$TMP'/pipeout.tmp-* >/dev/null 2>&1"
+# a rank that owns no gap (2 slices, 3 ranks) has nothing to read
+mkdir -p "$TMP/two" && cp "$TMP/in/0001.png" "$TMP/in/0002.png" "$TMP/two/"
+printf '0\n5\n' | runn 3 "$TMP/two" -o "$TMP/twoout" --heights /dev/stdin --threads 1 2> "$TMP/err.txt"
+rc=$?
+check "two slices, 3 ranks, heights pipe: exit 0 (got $rc: $(head -c 300 "$TMP/err.txt"))" [ "$rc" -eq 0 ]
+check "two slices, 3 ranks: a result" [ -f "$TMP/twoout/volume.nrrd" ]
 echo "mpi: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
