@@ -712,6 +712,10 @@ lsm_status lsm_pls_reseed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
   if (phi->nx != p->nx || phi->ny != p->ny)
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "particles: grid %dx%d, particles seeded on %dx%d",
                     phi->nx, phi->ny, p->nx, p->ny);
+  if (p->left_pending) { /* flagged to leave by the last correction: counted as such */
+    p->stats.left_domain += (long long)compact(p, PCL_LEFT);
+    p->left_pending = 0;
+  }
   p->stats.reseed_dropped += (long long)p->n;
   p->n = 0;
   p->gen++;

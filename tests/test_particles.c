@@ -721,6 +721,34 @@ static void test_reseed_and_adjust(void **state) {
   lsm_grid_destroy(&phi);
 }
 
+/* Particles that escaped too far (strays) are removed as having left the
+ * domain, also when a reseed follows in the same correction: with or without
+ * reseeding, every stray is counted in left_domain (run.json's "discarded"
+ * relies on it), none in reseed_dropped. */
+static void test_strays_counted_with_reseed(void **state) {
+  (void)state;
+  for (int reseed = 0; reseed <= 1; ++reseed) {
+    lsm_grid *phi = new_grid(40, 40, 1.0f, 1.0f), *moved = new_grid(40, 40, 1.0f, 1.0f);
+    fill_disc(phi, 20.0, 20.0, 8.0);
+    fill_disc(moved, 20.0, 20.0, 11.0); /* the front jumps 3 px out */
+    lsm_pls_opts o;
+    lsm_pls_opts_default(&o);
+    o.reseed_every = reseed;
+    lsm_particles *p = new_pls(phi, &o);
+    correct(p, moved);
+    correct(p, moved); /* without reseeding the strays leave at this one */
+    const lsm_pls_stats *st = lsm_pls_stats_get(p);
+    if (!(st->stray > 0 && st->stray == st->left_domain))
+      fail_msg("reseed_every %d: %lld strays, %lld left the domain", reseed, st->stray,
+               st->left_domain);
+    assert_int_equal((long long)lsm_pls_count(p),
+                     st->seeded - st->discarded - st->left_domain - st->reseed_dropped);
+    lsm_pls_destroy(&p);
+    lsm_grid_destroy(&phi);
+    lsm_grid_destroy(&moved);
+  }
+}
+
 /* Bad options are errors; tiny grids give an empty set. */
 static void test_options_and_edges(void **state) {
   (void)state;
@@ -779,6 +807,7 @@ int main(void) {
       cmocka_unit_test(test_determinism_threads),
       cmocka_unit_test(test_hook_equals_direct_stages),
       cmocka_unit_test(test_reseed_and_adjust),
+      cmocka_unit_test(test_strays_counted_with_reseed),
       cmocka_unit_test(test_options_and_edges),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
