@@ -85,11 +85,16 @@ LSM_FN float lsm_cfl_rate(float F, float dxm, float dxp, float dym, float dyp, f
   return LSM_FABS(F) * r;
 }
 
-/* The rate of a scheme: roefix 0 (upwind) or 1 (Roe-Fix). */
+/* The rate of a scheme: roefix 0 (upwind) or 1 (Roe-Fix).  A cell where phi
+ * is flat (all four differences 0: an empty slice's constant far value) has
+ * no Hamiltonian and no dissipation, rate 0, however large F is there.  Only
+ * all four: the step is fixed from phi_0, and a phi flat along one axis only
+ * (1-px stripes) is not flat a few steps later. */
 LSM_FN float lsm_cfl_rate_of(int roefix, float F, float dxm, float dxp, float dym, float dyp,
                              float inv_dx, float inv_dy) {
-  return roefix ? LSM_FABS(F) * (inv_dx + inv_dy)
-                : lsm_cfl_rate(F, dxm, dxp, dym, dyp, inv_dx, inv_dy);
+  if (!roefix) return lsm_cfl_rate(F, dxm, dxp, dym, dyp, inv_dx, inv_dy);
+  const int flat = dxm == 0.0f && dxp == 0.0f && dym == 0.0f && dyp == 0.0f;
+  return flat ? 0.0f : LSM_FABS(F) * (inv_dx + inv_dy);
 }
 
 /* ---- Roe-Fix (Osher & Fedkiw ch. 5.3; the design document's Algorithm 3.1) -------

@@ -620,6 +620,26 @@ static void test_schemes_monotone(void **state) {
   }
 }
 
+/* A flat phi (an empty slice's constant far value) cannot move whatever F:
+ * both schemes' CFL rates are 0 there, so the step is infinite (the morph is
+ * at rest).  Roe-Fix's rate |F| (1/dx + 1/dy) counted F = 1e6 there and took
+ * steps of 1e-6 until --max-iter. */
+static void test_cfl_flat_phi(void **state) {
+  (void)state;
+  lsm_grid *phi = new_grid(30, 30, 1.0f, 1.0f), *tgt = new_grid(30, 30, 1.0f, 1.0f);
+  for (int j = 0; j < 30; ++j)
+    for (int i = 0; i < 30; ++i) LSM_AT(phi, i, j) = 1e6f;
+  fill_circle(tgt, 0.0, 0.0, 6.0, 1.0);
+  for (int sch = 0; sch < 2; ++sch) {
+    const lsm_scheme scheme = sch ? LSM_SCHEME_ROEFIX : LSM_SCHEME_UPWIND;
+    double dt = 0.0;
+    lsm_cfl_dt(phi, tgt, scheme, 0.75, 1, &dt);
+    if (!isinf(dt)) fail_msg("%s: dt %g on a flat phi", lsm_scheme_name(scheme), dt);
+  }
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+}
+
 /* ------------------------------------------------------------------------ */
 /* integrators                                                               */
 
@@ -985,6 +1005,7 @@ int main(void) {
       cmocka_unit_test(test_stage_vs_cell_reference),
       cmocka_unit_test(test_roefix_cone_apex),
       cmocka_unit_test(test_schemes_monotone),
+      cmocka_unit_test(test_cfl_flat_phi),
       cmocka_unit_test(test_integrators_agree),
       cmocka_unit_test(test_front_measure),
       cmocka_unit_test(test_circles_upwind),
