@@ -1019,6 +1019,13 @@ static lsm_status result_input_count(const char *result_dir, size_t *count, lsm_
   return LSM_OK;
 }
 
+/* Whatever went to standard output (help, version, the device list, the scores) reached it. */
+static lsm_status check_stdout(lsm_err *err) {
+  if (fflush(stdout) != 0 || ferror(stdout))
+    return lsm_fail(err, LSM_ERR_IO, "standard output", "write failed: %s", strerror(errno));
+  return LSM_OK;
+}
+
 static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   char **truth = NULL;
   size_t n = 0;
@@ -1121,16 +1128,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   printf(", \"volume_error\": ");
   json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
   printf(", \"one_sided_empty\": %zu}\n", incomparable);
-  if (fflush(stdout) != 0 || ferror(stdout))
-    return lsm_fail(err, LSM_ERR_IO, NULL, "cannot write the scores to standard output");
-  return LSM_OK;
-}
-
-/* Whatever went to standard output (help, version, the device list) reached it. */
-static lsm_status check_stdout(lsm_err *err) {
-  if (fflush(stdout) != 0 || ferror(stdout))
-    return lsm_fail(err, LSM_ERR_IO, "standard output", "write failed: %s", strerror(errno));
-  return LSM_OK;
+  return check_stdout(err);
 }
 
 /* With file descriptor 0, 1 or 2 closed by the caller, the first file opened
