@@ -155,7 +155,9 @@ def score_stack(lsm, stack, k, methods, extra, work, reference=pchip_reference):
         shutil.rmtree(odir, ignore_errors=True)
         if method.startswith("pchip-"):
             os.makedirs(os.path.join(odir, "slices"))
-            for i, sl in enumerate(reference(stack, k, method[len("pchip-"):])):
+            # up to the last kept slice, as lsmorph writes (score refuses more)
+            last = (len(stack) - 1) // k * k
+            for i, sl in enumerate(reference(stack, k, method[len("pchip-"):])[:last + 1]):
                 vlib.write_mask(os.path.join(odir, "slices", "%05d.png" % (i + 1)), sl)
         else:
             subprocess.run([lsm, "reconstruct", kdir, "-o", odir, "--spacing", str(k),
