@@ -553,6 +553,51 @@ static void test_thin_outside(void **state) {
   sink_free(&rb.sink);
 }
 
+/* A pinhole: an oblique sulcus cuts each section as a hole of a pixel or two
+ * that moves from slice to slice.  Here a 2x2 hole inside a disc moves 2 px
+ * every 2 units of z (x = 38..39, 40..41, 42..43, 44..45 at z = 0, 2, 4, 6;
+ * rows 50..51), so half-way between two slices (z = 1, 3, 5) the truth's
+ * hole is the 2x2 cells at x = 39..40, 41..42, 43..44: cells where the two
+ * slices tie (+1/2 outside one, -1/2 inside the other).  The morph of so
+ * small a hole is numerical diffusion; the union of the two insides left 2
+ * of the 4 cells at z = 1 and 5.  At a pinhole's cells the profile is the
+ * monotone cubic of the signed distances, which follows the hole. */
+static void test_pinhole(void **state) {
+  (void)state;
+  const double z[4] = {0.0, 2.0, 4.0, 6.0};
+  slice_def defs[4]; /* holes cut by the strict insides of the rects */
+  for (int k = 0; k < 4; ++k) {
+    defs[k].n = 2;
+    defs[k].s[0] = disc(C, C, 30);
+    defs[k].s[1] = rect(37 + 2 * k, 49, 40 + 2 * k, 52, 1);
+  }
+  lsm_stack_opts o;
+  default_opts(&o);
+  o.dz = 1.0;
+  for (int m = 0; m < 2; ++m) {
+    o.method = m ? LSM_METHOD_PLS : LSM_METHOD_LS;
+    run r;
+    assert_int_equal(run_stack(&r, W, H, 0, defs, z, 4, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 7);
+    for (int k = 1; k <= 5; k += 2) {
+      const float *mid = r.sink.s[k].phi;
+      const int x0 = 38 + k; /* the truth's hole: x0, x0 + 1; rows 50, 51 */
+      size_t outside = 0, misplaced = 0;
+      for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i)
+          if ((i - C) * (i - C) + (j - C) * (j - C) <= 25.0 * 25.0 && mid[(size_t)j * W + i] > 0.0f) {
+            ++outside;
+            misplaced += !(i >= x0 && i <= x0 + 1 && j >= 50 && j <= 51);
+          }
+      print_message("pinhole (%s) z = %d: %zu outside cells, %zu of them off the truth's hole\n",
+                    lsm_method_name(o.method), k, outside, misplaced);
+      assert_int_equal(outside, 4);
+      assert_int_equal(misplaced, 0);
+    }
+    sink_free(&r.sink);
+  }
+}
+
 /* Inside cells with x >= x0 (the right-hand piece below). */
 static size_t area_right_of(const float *phi, int w, int h, int x0) {
   size_t n = 0;
@@ -1031,6 +1076,7 @@ int main(void) {
       cmocka_unit_test(test_output_count_matches_gaps),
       cmocka_unit_test(test_merge_split),
       cmocka_unit_test(test_thin_outside),
+      cmocka_unit_test(test_pinhole),
       cmocka_unit_test(test_branch_recedes),
       cmocka_unit_test(test_end_parts),
       cmocka_unit_test(test_vanish_appear),
