@@ -879,8 +879,10 @@ static inline float two_sided(float fwd, float rev, float a, float b, float thin
 
 /* Marks (hole[k] = 1) the cells of phi's pinholes: the 4-connected
  * components of its outside (phi > 0) that do not reach the grid's border
- * and lie everywhere less than `thin` from the inside.  queue holds nx * ny
- * cells.  Returns the number of cells marked. */
+ * and lie everywhere less than `thin` from the inside.  (4-connected: the
+ * dual of the 8-connected insides of lsm_grid_label_components, so an
+ * outside closed by a diagonal step of the inside is closed.)  queue holds
+ * nx * ny cells.  Returns the number of cells marked. */
 static size_t mark_pinholes(const lsm_grid *phi, float thin, uint8_t *hole, int32_t *queue) {
   enum { UNSEEN, PINHOLE, OPEN, QUEUED };
   const int nx = phi->nx, ny = phi->ny;
