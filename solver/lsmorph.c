@@ -230,6 +230,8 @@ typedef struct out_sink {
   double z_first, z_last;
   double step_min, step_max; /* between consecutive output slices */
   uint8_t *mask;
+  uint64_t max_voxels; /* --max-voxels: checked ahead, but with --per-iteration only here */
+  const char *input;   /* the slice folder, named in that error */
 } out_sink;
 
 /* The files written to OUT_DIR, in the order they are listed. */
@@ -269,6 +271,14 @@ static int sink_evenly_spaced(const out_sink *s) {
 static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, double z,
                             long input_index, lsm_err *err) {
   out_sink *s = ctx;
+  /* the slice count of --per-iteration is not known ahead: its volume is held
+   * to --max-voxels as it grows (any other run was checked before it began) */
+  if ((double)(s->count + 1) * (double)width * (double)height > (double)s->max_voxels)
+    return lsm_fail(err, LSM_ERR_LIMIT, s->input,
+                    "%zu output slices of %dx%d written; one more would pass --max-voxels %llu "
+                    "(with --per-iteration every solver step is a slice: raise --tol, lower "
+                    "--max-iter or raise --max-voxels)",
+                    s->count, width, height, (unsigned long long)s->max_voxels);
   /* the mesh and the previews need increasing heights: a repeated one adds nothing */
   const int higher = s->count == 0 || z > s->z_last;
   LSM_TRY(lsm_volume_writer_write_slice(s->volume, phi, z, err));
@@ -885,6 +895,8 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     char path[4200];
     snprintf(sink.dir, sizeof sink.dir, "%s", tmp);
     sink.write_slices = cli->write_slices;
+    sink.max_voxels = cli->max_voxels;
+    sink.input = cli->slice_dir;
     const double pixel = cli->stack.pixel_size;
     const double dz = cli->stack.dz > 0 ? cli->stack.dz : pixel;
     st = lsm_volume_writer_open(tmp, cli->formats, (lsm_values)cli->values, width, height, pixel,

@@ -151,6 +151,9 @@ expect "grid over 2^31 cells" 1 "huge2/1.png: 200000x200000 slices need a workin
 expect "--max-pixels" 1 "good/1.png: image is 32x32 = 1024 pixels, more than the limit of 1000" out \
   reconstruct good -o out -q --max-pixels 1000
 expect "--max-voxels" 1 "more than --max-voxels 3000" out reconstruct good -o out -q --max-voxels 3000
+# --per-iteration's slice count is not known ahead: held to the limit as it is written
+expect "--max-voxels, per iteration" 1 "good: 2 output slices of 32x32 written; one more would pass --max-voxels 3000" out \
+  reconstruct good -o out -q --per-iteration --max-voxels 3000
 expect "2e13 output slices" 1 "the output would have 2e+13 slices of 32x32" out reconstruct good -o out -q --spacing 1e10 --dz 1e-3
 # a 20000x1 strip: an aligned gap pads each axis by up to half its side, a
 # canvas of up to 40004 x 5 cells, more than 4 x --max-pixels 20000
