@@ -3,16 +3,8 @@
 #include "lsm_io.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdio.h>
 #include <string.h>
-
-static void json_num(FILE *f, double v) {
-  if (isfinite(v))
-    fprintf(f, "%.17g", v);
-  else
-    fputs("null", f);
-}
 
 lsm_status lsm_raw_write_json(const char *path, const char *data_file,
                               const lsm_volume_info *info, lsm_err *err) {
@@ -21,23 +13,20 @@ lsm_status lsm_raw_write_json(const char *path, const char *data_file,
   FILE *f = fopen(path, "w");
   if (!f) return lsm_fail(err, LSM_ERR_IO, path, "cannot create: %s", strerror(errno));
   const int mask = info->values == LSM_VALUES_MASK;
-  fputs("{\n  \"file\": \"", f);
-  for (const char *p = data_file; *p; ++p) {
-    if (*p == '"' || *p == '\\') fputc('\\', f);
-    fputc(*p, f);
-  }
-  fprintf(f, "\",\n  \"sizes\": [%d, %d, %zu],\n  \"spacing\": [", info->nx, info->ny, info->nz);
-  json_num(f, info->sx);
+  fputs("{\n  \"file\": ", f);
+  lsm_json_string(f, data_file);
+  fprintf(f, ",\n  \"sizes\": [%d, %d, %zu],\n  \"spacing\": [", info->nx, info->ny, info->nz);
+  lsm_json_number(f, info->sx);
   fputs(", ", f);
-  json_num(f, info->sy);
+  lsm_json_number(f, info->sy);
   fputs(", ", f);
-  json_num(f, info->sz);
+  lsm_json_number(f, info->sz);
   fputs("],\n  \"origin\": [", f);
-  json_num(f, info->ox);
+  lsm_json_number(f, info->ox);
   fputs(", ", f);
-  json_num(f, info->oy);
+  lsm_json_number(f, info->oy);
   fputs(", ", f);
-  json_num(f, info->oz);
+  lsm_json_number(f, info->oz);
   fprintf(f,
           "],\n  \"dtype\": \"%s\",\n  \"endianness\": \"little\",\n  \"header_bytes\": 0,\n"
           "  \"order\": \"x fastest, then y (image row), then z (slice)\",\n"

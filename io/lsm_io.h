@@ -8,6 +8,7 @@
  *   io_mha.c      MetaImage header (volume.mha)
  *   io_vtk.c      legacy VTK header (volume.vtk)
  *   io_raw.c      JSON sidecar of volume.raw
+ *   io_json.c     JSON strings and numbers (run.json, scores, volume.json)
  *   io_exr.c      one OpenEXR file per slice (OpenEXRCore C API)
  *
  * Every function returns an lsm_status and records "<file>: <what>" in err.
@@ -194,6 +195,16 @@ typedef struct lsm_volume_info {
  * small. */
 size_t lsm_mha_header(char *out, size_t cap, const lsm_volume_info *info);
 size_t lsm_vtk_header(char *out, size_t cap, const lsm_volume_info *info);
+
+/* ---- JSON ---------------------------------------------------------------- */
+
+/* A JSON string of s.  File names are bytes: a byte that is not part of
+ * well-formed UTF-8 is written as the Latin-1 character of that value
+ * (\u00XX), so the output is valid JSON for any name. */
+void lsm_json_string(FILE *f, const char *s);
+/* A JSON number: the shortest of 15, 16 or 17 significant digits that reads
+ * back as v; null when v is not finite. */
+void lsm_json_number(FILE *f, double v);
 
 /* Writes the JSON sidecar of a raw volume (sizes, spacing, origin, dtype,
  * endianness, data file name). */

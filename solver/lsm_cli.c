@@ -2,6 +2,7 @@
 
 #include "../io/lsm_io.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -88,7 +89,8 @@ static const char reconstruct_help_method[] =
     "                         (odd: one more positive; default 16)\n"
     "  --pls-reseed N         pls: reseed the particles every N steps (default 0 = never)\n"
     "  --pls-radius-adjust    pls: reset particle radii after each correction (off)\n"
-    "  --seed N               pls: random seed (same seed, same volume, any --threads)\n"
+    "  --seed N               pls: random seed, 0 .. 2^64 - 1 (same seed, same volume,\n"
+    "                         any --threads)\n"
     "  --scheme upwind|roe-fix  numerical Hamiltonian (default upwind: first-order\n"
     "                         Godunov; roe-fix: Algorithm 3.1 of the design document)\n"
     "  --time euler|rk2|rk3   time integrator (default euler; rk2/rk3: TVD Runge-Kutta)\n"
@@ -252,11 +254,17 @@ static lsm_status parse_length(const char *opt, const char *text, double *out, l
 
 static lsm_status parse_int(const char *opt, const char *text, long min, long max, long *out,
                             lsm_err *err) {
+  /* digits with an optional leading '-', nothing else (strtol alone would
+   * take leading blanks and a '+') */
+  const char *digits = text[0] == '-' ? text + 1 : text;
   char *end = NULL;
   errno = 0;
-  long v = strtol(text, &end, 10);
-  if (end == text || *end != '\0' || errno == ERANGE)
+  long v = isdigit((unsigned char)digits[0]) ? strtol(text, &end, 10) : 0;
+  if (!end || end == text || *end != '\0')
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: '%s' is not an integer", opt, text);
+  if (errno == ERANGE)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: %s is out of range [%ld, %ld]", opt, text, min,
+                    max);
   if (v < min || v > max)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: %ld is out of range [%ld, %ld]", opt, v, min,
                     max);
@@ -403,8 +411,15 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       so->morph.pls.radius_adjust = 1;
     } else if (IS("--seed")) {
       NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 0, LONG_MAX, &n, err));
-      so->morph.pls.seed = (uint64_t)n;
+      /* any 64-bit unsigned value: digits only */
+      char *end = NULL;
+      errno = 0;
+      const unsigned long long seed = isdigit((unsigned char)v[0]) ? strtoull(v, &end, 10) : 0;
+      if (!end || *end != '\0')
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--seed: '%s' is not a whole number", v);
+      if (errno == ERANGE || seed > UINT64_MAX)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--seed: %s is out of range [0, 2^64 - 1]", v);
+      so->morph.pls.seed = (uint64_t)seed;
     } else if (IS("--backend")) {
       NEEDS_VALUE();
       if ((cli->backend = lsm_backend_kind_from_name(v)) == LSM_BACKEND_UNKNOWN)
@@ -433,15 +448,19 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       NEEDS_VALUE();
       double d;
       LSM_TRY(parse_double(name, v, &d, 1, err));
-      if (d > 9.0e15 || d != floor(d))
+      if (d != floor(d))
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-pixels: '%s' is not a whole number of pixels", v);
+      if (d > 9.0e15)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-pixels: %s is more than 9e15", v);
       cli->max_pixels = (uint64_t)d;
     } else if (IS("--max-voxels")) {
       NEEDS_VALUE();
       double d;
       LSM_TRY(parse_double(name, v, &d, 1, err));
-      if (d > 9.0e15 || d != floor(d))
+      if (d != floor(d))
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-voxels: '%s' is not a whole number of voxels", v);
+      if (d > 9.0e15)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-voxels: %s is more than 9e15", v);
       cli->max_voxels = (uint64_t)d;
     } else if (IS("-q") || IS("--quiet")) {
       cli->quiet = 1;

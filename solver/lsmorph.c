@@ -341,26 +341,6 @@ static void progress_update(void *ctx, size_t done, size_t total, size_t pair, s
 
 /* ---- run.json -------------------------------------------------------------------------------- */
 
-static void json_string(FILE *f, const char *s) {
-  fputc('"', f);
-  for (const unsigned char *p = (const unsigned char *)s; *p; ++p) {
-    if (*p == '"' || *p == '\\')
-      fprintf(f, "\\%c", *p);
-    else if (*p < 0x20)
-      fprintf(f, "\\u%04x", *p);
-    else
-      fputc(*p, f);
-  }
-  fputc('"', f);
-}
-
-static void json_number(FILE *f, double v) {
-  if (isfinite(v))
-    fprintf(f, "%.10g", v);
-  else
-    fputs("null", f);
-}
-
 static lsm_status write_run_json(const char *path, int argc, char **argv, const lsm_cli *cli,
                                  const png_source *src, const double *z, int width, int height,
                                  const out_sink *sink, const lsm_pair_stats *stats, int threads,
@@ -371,52 +351,57 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   fprintf(f, "{\n  \"lsmorph_version\": \"%s\",\n  \"command\": [", LSM_VERSION);
   for (int k = 0; k < argc; ++k) {
     if (k) fputs(", ", f);
-    json_string(f, argv[k]);
+    lsm_json_string(f, argv[k]);
   }
   fputs("],\n  \"backend\": {\"name\": ", f);
-  json_string(f, backend->ops->name);
+  lsm_json_string(f, backend->ops->name);
   fputs(", \"device\": ", f);
-  json_string(f, backend->device);
+  lsm_json_string(f, backend->device);
   fputs(", \"build_seconds\": ", f);
-  json_number(f, backend->build_seconds);
+  lsm_json_number(f, backend->build_seconds);
   fprintf(f, ", \"kernel_cache_hit\": %s},\n", backend->kernel_cache_hit ? "true" : "false");
   fputs("  \"options\": {\"method\": ", f);
-  json_string(f, lsm_method_name(o->method));
+  lsm_json_string(f, lsm_method_name(o->method));
   fputs(", \"scheme\": ", f);
-  json_string(f, lsm_scheme_name(o->morph.scheme));
+  lsm_json_string(f, lsm_scheme_name(o->morph.scheme));
   fputs(", \"time\": ", f);
-  json_string(f, lsm_time_name(o->morph.time));
+  lsm_json_string(f, lsm_time_name(o->morph.time));
   fputs(", \"input\": ", f);
-  json_string(f, lsm_input_name(o->input));
+  lsm_json_string(f, lsm_input_name(o->input));
   fputs(", \"align\": ", f);
-  json_string(f, lsm_align_name(o->align));
+  lsm_json_string(f, lsm_align_name(o->align));
   fputs(", \"interp\": ", f);
-  json_string(f, lsm_interp_name(o->interp));
+  lsm_json_string(f, lsm_interp_name(o->interp));
   fputs(", \"ends\": ", f);
-  json_string(f, lsm_end_rule_name(o->ends));
-  fprintf(f, ", \"cfl\": %.10g, \"reinit_every\": %d, \"reinit_iters\": %d, \"tol\": %.10g, "
-             "\"max_iter\": %d, \"per_iteration\": %s, \"pixel_size\": %.10g, \"dz\": %.10g, "
-             "\"invert\": %s, \"threads\": %d},\n",
-          o->morph.cfl, o->morph.reinit_every, o->morph.reinit_iters, o->tol, o->max_iter,
-          o->per_iteration ? "true" : "false", o->pixel_size,
-          o->dz > 0 ? o->dz : o->pixel_size, cli->invert ? "true" : "false", threads);
+  lsm_json_string(f, lsm_end_rule_name(o->ends));
+  fputs(", \"cfl\": ", f);
+  lsm_json_number(f, o->morph.cfl);
+  fprintf(f, ", \"reinit_every\": %d, \"reinit_iters\": %d, \"tol\": ", o->morph.reinit_every,
+          o->morph.reinit_iters);
+  lsm_json_number(f, o->tol);
+  fprintf(f, ", \"max_iter\": %d, \"per_iteration\": %s, \"pixel_size\": ", o->max_iter,
+          o->per_iteration ? "true" : "false");
+  lsm_json_number(f, o->pixel_size);
+  fputs(", \"dz\": ", f);
+  lsm_json_number(f, o->dz > 0 ? o->dz : o->pixel_size);
+  fprintf(f, ", \"invert\": %s, \"threads\": %d},\n", cli->invert ? "true" : "false", threads);
   fputs("  \"input\": {\"folder\": ", f);
-  json_string(f, cli->slice_dir);
+  lsm_json_string(f, cli->slice_dir);
   fprintf(f, ", \"slices\": %zu, \"width\": %d, \"height\": %d, \"files\": [", src->count, width,
           height);
   for (size_t k = 0; k < src->count; ++k) {
     if (k) fputs(", ", f);
-    json_string(f, base_name(src->paths[k]));
+    lsm_json_string(f, base_name(src->paths[k]));
   }
   fputs("], \"heights\": [", f);
   for (size_t k = 0; k < src->count; ++k) {
     if (k) fputs(", ", f);
-    json_number(f, z[k]);
+    lsm_json_number(f, z[k]);
   }
   fprintf(f, "]},\n  \"output\": {\"slices\": %zu, \"first_height\": ", sink->count);
-  json_number(f, sink->z_first);
+  lsm_json_number(f, sink->z_first);
   fputs(", \"last_height\": ", f);
-  json_number(f, sink->z_last);
+  lsm_json_number(f, sink->z_last);
   fprintf(f, ", \"evenly_spaced\": %s",
           sink_evenly_spaced(sink) ? "true" : "false");
   fputs(", \"files\": [", f);
@@ -424,7 +409,7 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   size_t nfiles = output_files(cli, files, 16);
   for (size_t k = 0; k < nfiles && k < 16; ++k) {
     if (k) fputs(", ", f);
-    json_string(f, files[k]);
+    lsm_json_string(f, files[k]);
   }
   fputs("]},\n  \"pairs\": [\n", f);
   long long iterations = 0, updates = 0;
@@ -432,17 +417,17 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   for (size_t k = 0; k + 1 < src->count; ++k) {
     const lsm_pair_stats *p = &stats[k];
     fputs("    {\"source\": ", f);
-    json_string(f, base_name(src->paths[p->source]));
+    lsm_json_string(f, base_name(src->paths[p->source]));
     fputs(", \"target\": ", f);
-    json_string(f, base_name(src->paths[p->target]));
+    lsm_json_string(f, base_name(src->paths[p->target]));
     fprintf(f, ", \"iterations\": %d, \"dt\": ", p->iterations);
-    json_number(f, p->dt);
+    lsm_json_number(f, p->dt);
     fputs(", \"cp\": ", f);
-    json_number(f, p->cp);
+    lsm_json_number(f, p->cp);
     fputs(", \"seconds\": ", f);
-    json_number(f, p->seconds);
+    lsm_json_number(f, p->seconds);
     fprintf(f, ", \"cells\": %lld, \"t_final\": ", p->cells);
-    json_number(f, p->t_final);
+    lsm_json_number(f, p->t_final);
     fprintf(f, ", \"slices\": %zu, \"hit_max_iter\": %s, \"rank\": %d", p->slices,
             p->hit_max_iter ? "true" : "false", p->rank);
     fprintf(f, ", \"aligned\": %s, \"moving_parts\": %d", p->aligned ? "true" : "false",
@@ -450,7 +435,7 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
     if (o->method == LSM_METHOD_PLS) {
       fprintf(f, ", \"particles\": {\"seeded\": %lld, \"discarded\": %lld, \"escaped_per_step\": ",
               p->pls_seeded, p->pls_discarded);
-      json_number(f, p->pls_steps ? (double)p->pls_escaped / (double)p->pls_steps : 0.0);
+      lsm_json_number(f, p->pls_steps ? (double)p->pls_escaped / (double)p->pls_steps : 0.0);
       fprintf(f, ", \"escaped\": %lld, \"corrected\": %lld, \"steps\": %lld}", p->pls_escaped,
               p->pls_corrected, p->pls_steps);
     }
@@ -461,11 +446,11 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   }
   fprintf(f, "  ],\n  \"totals\": {\"pairs\": %zu, \"iterations\": %lld, \"seconds\": ",
           src->count - 1, iterations);
-  json_number(f, seconds);
+  lsm_json_number(f, seconds);
   fputs(", \"wall_seconds\": ", f);
-  json_number(f, wall);
+  lsm_json_number(f, wall);
   fprintf(f, ", \"cell_updates\": %lld, \"cells_per_second\": ", updates);
-  json_number(f, seconds > 0 ? (double)updates / seconds : NAN);
+  lsm_json_number(f, seconds > 0 ? (double)updates / seconds : NAN);
   /* per process (MPI rank): how many gaps it ran and their solver seconds */
   int ranks = 1;
   for (size_t k = 0; k + 1 < src->count; ++k)
@@ -480,7 +465,7 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
         rank_seconds += stats[k].seconds;
       }
     fprintf(f, "%s{\"rank\": %d, \"gaps\": %zu, \"seconds\": ", q ? ", " : "", q, gaps);
-    json_number(f, rank_seconds);
+    lsm_json_number(f, rank_seconds);
     fputc('}', f);
   }
   fputs("]\n}\n", f);
@@ -1128,17 +1113,17 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   /* undefined scores (no held-out slice, no boundary on both sides, an empty
    * truth) are JSON null, as in run.json */
   printf("{\"held_out\": %zu, \"dice_volume\": ", count);
-  json_number(stdout, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0);
+  lsm_json_number(stdout, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0);
   printf(", \"dice\": ");
-  json_number(stdout, count ? dice / (double)count : NAN);
+  lsm_json_number(stdout, count ? dice / (double)count : NAN);
   printf(", \"hd95\": ");
-  json_number(stdout, measured ? hd95 / (double)measured : NAN);
+  lsm_json_number(stdout, measured ? hd95 / (double)measured : NAN);
   printf(", \"hd95_pooled\": ");
-  json_number(stdout, pooled);
+  lsm_json_number(stdout, pooled);
   printf(", \"mean_surface\": ");
-  json_number(stdout, measured ? msd / (double)measured : NAN);
+  lsm_json_number(stdout, measured ? msd / (double)measured : NAN);
   printf(", \"volume_error\": ");
-  json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
+  lsm_json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
   printf(", \"one_sided_empty\": %zu}\n", incomparable);
   return check_stdout(err);
 }

@@ -310,6 +310,32 @@ if [ -f "$TMP/out-nat/run.json" ]; then
   # Heights 0, 4, 8 with dz 1: 9 slices.
   check "natural-sort run wrote 9 slices" [ "$(lines "$TMP/out-nat/heights.txt")" -eq 9 ]
 fi
+# ---- run.json: any file name, heights as given ------------------------------------------------
+# Names that are not UTF-8 (a Latin-1 e-acute, byte 0xe9) still make valid JSON
+# (as \u00e9), and heights keep every digit of the heights file.
+ODD="$TMP/odd"
+mkdir "$ODD"
+cp "$SET/001.png" "$ODD/$(printf 'a\351')1.png"
+cp "$SET/002.png" "$ODD/$(printf 'a\351')2.png"
+printf '1000000.1234567\n1000001.1234567\n' >"$TMP/odd-heights"
+"$LSM" reconstruct "$ODD" -o "$TMP/out-odd" --input outline --heights "$TMP/odd-heights" \
+  --method blend --no-preview -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "non-UTF-8 names run exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+if command -v python3 >/dev/null 2>&1 && [ -f "$TMP/out-odd/run.json" ]; then
+  check "run.json is valid JSON with non-UTF-8 names (Latin-1), heights to every digit" python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1], encoding="utf-8"))
+assert d["input"]["files"] == ["a\u00e91.png", "a\u00e92.png"], d["input"]["files"]
+assert d["input"]["heights"] == [1000000.1234567, 1000001.1234567], d["input"]["heights"]
+assert d["output"]["first_height"] == 1000000.1234567, d["output"]
+' "$TMP/out-odd/run.json"
+fi
+# --seed takes any 64-bit unsigned value
+"$LSM" reconstruct "$NAT" -o "$TMP/out-seed" --input outline --spacing 4 --method pls \
+  --seed 18446744073709551615 --no-preview -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--seed 2^64 - 1 runs (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 # The rectangles shrink in natural order (1.png: 86x56, 2.png: 64x42, 10.png:
 # 48x30); byte order (1, 10, 2) would not.  With dz 1 the output slices at
 # z = 0, 4, 8 are those inputs exactly: count their inside cells (phi <= 0)

@@ -214,6 +214,15 @@ expect "unknown option value" 2 "--method: 'magic' is not one of" out reconstruc
 expect "bad --threads" 2 "--threads: 0 is out of range" out reconstruct good -o out --threads 0
 expect "bad --max-pixels" 2 "--max-pixels: '1.5' is not a whole number" out reconstruct good -o out --max-pixels 1.5
 expect "bad --max-voxels" 2 "--max-voxels: -3 must be positive" out reconstruct good -o out --max-voxels -3
+expect "--max-voxels past 9e15" 2 "--max-voxels: 1e16 is more than 9e15" out reconstruct good -o out --max-voxels 1e16
+# integers are digits with an optional '-': no blanks, no '+' (as the number options)
+expect "--threads with a blank" 2 "--threads: ' 4' is not an integer" out reconstruct good -o out --threads " 4"
+expect "--threads with a plus" 2 "--threads: '+4' is not an integer" out reconstruct good -o out --threads +4
+expect "--threads past long" 2 "--threads: 99999999999999999999 is out of range [1, 4096]" out \
+  reconstruct good -o out --threads 99999999999999999999
+expect "--seed -1" 2 "--seed: '-1' is not a whole number" out reconstruct good -o out --method pls --seed -1
+expect "--seed 2^64" 2 "--seed: 18446744073709551616 is out of range" out \
+  reconstruct good -o out --method pls --seed 18446744073709551616
 expect "flag with a value" 2 "--invert takes no value" out reconstruct good -o out --invert=yes
 expect "option without its value" 2 "-o needs a value" - reconstruct good -o
 expect "missing -o" 2 "missing -o OUT_DIR" - reconstruct good
