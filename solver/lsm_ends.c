@@ -249,7 +249,7 @@ struct lsm_end {
   double trend_reach;   /* how far past F the per-cell trend is carried (h_N) */
   double h_farther;     /* |z_M - z_N| */
   int has_beyond;       /* there is a slice N beyond F */
-  lsm_grid *slope;      /* per cell max(m, 0), m = (phi_F - phi_N) / h_N (trend) */
+  lsm_grid *slope;      /* per cell max(phi_F - phi_N, 0): the slope times h_N (trend) */
   end_parts parts;      /* F's components and how each ends (trend) */
   double *target;       /* per part: cells kept at the current sigma, at most */
   double *least;        /* per part: and at least (a tenth of the tip) */
@@ -291,13 +291,14 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
   if (st == LSM_OK && !(e->scratch = lsm_alloc(cells, sizeof *e->scratch, err, "end cells")))
     st = err ? err->status : LSM_ERR_NOMEM;
   if (st == LSM_OK) {
-    const float hn = beyond ? (float)h_beyond : 1.0f;
+    const double hn = beyond ? h_beyond : 1.0;
     e->trend_reach = hn;
     e->has_beyond = beyond != NULL;
+    /* the slope times h_N: a difference of phi, whatever the units of z */
     for (int j = 0; j < full->ny; ++j)
       for (int i = 0; i < full->nx; ++i)
         LSM_AT(e->slope, i, j) =
-            beyond ? fmaxf((LSM_AT(full, i, j) - LSM_AT(beyond, i, j)) / hn, 0.0f) : 0.0f;
+            beyond ? fmaxf(LSM_AT(full, i, j) - LSM_AT(beyond, i, j), 0.0f) : 0.0f;
     /* with no slice N beyond F (a lone section) nothing tells how the object
      * ends: every part is a flat end */
     e->h_farther = h_farther;
@@ -326,7 +327,8 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
       for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + depth;
     return;
   }
-  const float rise = (float)fmin(sigma * e->H, e->trend_reach);
+  /* the trend carried sigma H past F, at most h_N, in units of h_N */
+  const float rise = (float)fmin(sigma * (e->H / e->trend_reach), 1.0);
   for (int j = 0; j < work->ny; ++j)
     for (int i = 0; i < work->nx; ++i)
       LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(e->slope, i, j);

@@ -156,32 +156,32 @@ static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy
 
 /* ---- monotone cubic (PCHIP) ------------------------------------------------------------- */
 
-/* Both strictly positive or both strictly negative.  Signs are compared, not
- * multiplied: with h in physical z units and d = dphi / h, products such as
- * d0 d1 under- or overflowed a float where a gap is more than about 1e17
- * pixel sizes long or less than 1e-22 (the result depended on the unit). */
-static inline int same_sign(float a, float b) {
-  return (a > 0.0f && b > 0.0f) || (a < 0.0f && b < 0.0f);
+/* Both strictly positive or both strictly negative (signs compared, not
+ * multiplied, so no product can under- or overflow). */
+static inline int same_sign(double a, double b) {
+  return (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0);
 }
 
 /* Fritsch–Carlson slope at a knot between intervals of lengths h0, h1 with
  * secants d0, d1 (the weighted harmonic mean of Fritsch & Butland, as in
  * Moler's pchip): zero at a local extremum, so the Hermite cubic stays within
- * the range of its two knots — no overshoot.  The weights are divided by
- * h0 + h1 so that w / d stays within a float's range too. */
-static inline float pchip_slope(float h0, float h1, float d0, float d1) {
-  if (!same_sign(d0, d1)) return 0.0f;
-  const float hs = h0 + h1, w1 = (2.0f * h1 + h0) / hs, w2 = (h1 + 2.0f * h0) / hs;
+ * the range of its two knots — no overshoot.  At most 3 min(|d0|, |d1|).
+ * Homogeneous: scaling h0, h1 by c scales the slope by 1/c, so callers pass
+ * lengths in units of the gap (its slope times H, the size of phi itself),
+ * and nothing depends on the ratio of pixel size to slice spacing. */
+static inline double pchip_slope(double h0, double h1, double d0, double d1) {
+  if (!same_sign(d0, d1)) return 0.0;
+  const double hs = h0 + h1, w1 = (2.0 * h1 + h0) / hs, w2 = (h1 + 2.0 * h0) / hs;
   return (w1 + w2) / (w1 / d0 + w2 / d1);
 }
 
 /* PCHIP slope at the end of the data (scipy's non-centred three-point
  * formula, shape preserving): h0, d0 the last interval and its secant, h1, d1
- * the one before it. */
-static inline float pchip_edge_slope(float h0, float h1, float d0, float d1) {
-  const float hs = h0 + h1, m = ((2.0f * h0 + h1) / hs) * d0 - (h0 / hs) * d1;
-  if (!same_sign(m, d0)) return 0.0f;
-  if (same_sign(d0, -d1) && fabsf(m) > 3.0f * fabsf(d0)) return 3.0f * d0;
+ * the one before it.  At most 3 |d0|; homogeneous as pchip_slope. */
+static inline double pchip_edge_slope(double h0, double h1, double d0, double d1) {
+  const double hs = h0 + h1, m = ((2.0 * h0 + h1) / hs) * d0 - (h0 / hs) * d1;
+  if (!same_sign(m, d0)) return 0.0;
+  if (same_sign(d0, -d1) && fabs(m) > 3.0 * fabs(d0)) return 3.0 * d0;
   return m;
 }
 
@@ -335,13 +335,13 @@ static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_in
   if (interp == LSM_INTERP_CUBIC && align == LSM_ALIGN_HULL && !a->empty && !b->empty) {
     if (window_usable(w, 0)) {
       const double h0 = w->z[1] - w->z[0];
-      f->mx[0] = pchip_slope((float)h0, (float)f->H, (float)((f->dx[1] - f->dx[0]) / h0), (float)sx);
-      f->my[0] = pchip_slope((float)h0, (float)f->H, (float)((f->dy[1] - f->dy[0]) / h0), (float)sy);
+      f->mx[0] = pchip_slope(h0, f->H, (f->dx[1] - f->dx[0]) / h0, sx);
+      f->my[0] = pchip_slope(h0, f->H, (f->dy[1] - f->dy[0]) / h0, sy);
     }
     if (window_usable(w, 3)) {
       const double h1 = w->z[3] - w->z[2];
-      f->mx[1] = pchip_slope((float)f->H, (float)h1, (float)sx, (float)((f->dx[3] - f->dx[2]) / h1));
-      f->my[1] = pchip_slope((float)f->H, (float)h1, (float)sy, (float)((f->dy[3] - f->dy[2]) / h1));
+      f->mx[1] = pchip_slope(f->H, h1, sx, (f->dx[3] - f->dx[2]) / h1);
+      f->my[1] = pchip_slope(f->H, h1, sy, (f->dy[3] - f->dy[2]) / h1);
     }
   }
   int mx = 0, my = 0;
@@ -419,7 +419,8 @@ static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double 
 
 /* The working fields of one gap: phi_A and phi_B on the padded canvas, each
  * slice centred by its own shift, and — for the cubic profile — the PCHIP
- * slopes dphi/dz at A and B from the neighbouring slices (NULL for linear). */
+ * slopes at A and B from the neighbouring slices, per gap: H dphi/dz (NULL
+ * for linear). */
 typedef struct gap {
   frame f;
   lsm_grid *phi_a, *phi_b;
@@ -569,30 +570,30 @@ static void gap_paste_parts(const gap *g, double s, float *out) {
  * offset (end_offsets.py, where the first and last kept slices are empty)
  * the means do not move. */
 static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2], lsm_err *err) {
-  lsm_grid *outer[2] = {NULL, NULL}; /* secants beyond A (prev -> A) and beyond B (B -> next) */
+  /* Lengths in units of the gap H: a slope is stored times H (phi per gap),
+   * the size of phi's own differences whatever the pixel size and spacing. */
+  lsm_grid *outer[2] = {NULL, NULL}; /* phi differences beyond A (A - prev) and B (next - B) */
   int end[2] = {0, 0};               /* that neighbour is an empty slice */
-  float end_secant[2] = {0.0f, 0.0f}, h_outer[2] = {1.0f, 1.0f};
+  double end_secant[2] = {0.0, 0.0}, h_outer[2] = {1.0, 1.0}; /* per gap, in gaps */
   LSM_TRY(lsm_grid_clone(g->phi_a, &g->slope_a, err));
   LSM_TRY(lsm_grid_clone(g->phi_a, &g->slope_b, err));
-  const float H = (float)g->f.H;
   lsm_status st = LSM_OK;
   for (int side = 0; side < 2 && st == LSM_OK; ++side) {
     const int k = side ? 3 : 0, kf = side ? 2 : 1; /* the neighbour, and A or B */
     if (!w->s[k] || !w->s[k]->loaded) continue;
     const lsm_grid *own = side ? g->phi_b : g->phi_a;
-    const float h = (float)fabs(w->z[k] - w->z[kf]);
-    h_outer[side] = h;
+    h_outer[side] = fabs(w->z[k] - w->z[kf]) / g->f.H;
     if (w->s[k]->empty) {
-      const float R = (float)lsm_end_depth(own);
+      const double R = lsm_end_depth(own);
       end[side] = 1;
-      end_secant[side] = side ? R / h : -R / h;
+      end_secant[side] = (side ? R : -R) / h_outer[side];
       continue;
     }
-    lsm_grid *sec = outer[side] = beyond[side]; /* the neighbour's phi, made its secant */
-    for (int j = 0; j < sec->ny; ++j)
-      for (int i = 0; i < sec->nx; ++i) {
-        float *v = &LSM_AT(sec, i, j);
-        *v = side ? (*v - LSM_AT(own, i, j)) / h : (LSM_AT(own, i, j) - *v) / h;
+    lsm_grid *diff = outer[side] = beyond[side]; /* the neighbour's phi, made a difference */
+    for (int j = 0; j < diff->ny; ++j)
+      for (int i = 0; i < diff->nx; ++i) {
+        float *v = &LSM_AT(diff, i, j);
+        *v = side ? *v - LSM_AT(own, i, j) : LSM_AT(own, i, j) - *v;
       }
   }
   for (int side = 0; side < 2 && st == LSM_OK; ++side) {
@@ -600,18 +601,20 @@ static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2],
     const int other = 1 - side;
     for (int j = 0; j < m->ny; ++j)
       for (int i = 0; i < m->nx; ++i) {
-        const float d = (LSM_AT(g->phi_b, i, j) - LSM_AT(g->phi_a, i, j)) / H;
-        float *pm = &LSM_AT(m, i, j);
+        const double d = (double)LSM_AT(g->phi_b, i, j) - (double)LSM_AT(g->phi_a, i, j);
+        double slope;
         if (end[side]) /* as the end gap continues it: only shrinking toward the end */
-          *pm = side ? fmaxf(d, 0.0f) : fminf(d, 0.0f);
+          slope = side ? fmax(d, 0.0) : fmin(d, 0.0);
         else if (outer[side])
-          *pm = side ? pchip_slope(H, h_outer[1], d, LSM_AT(outer[1], i, j))
-                     : pchip_slope(h_outer[0], H, LSM_AT(outer[0], i, j), d);
+          slope = side ? pchip_slope(1.0, h_outer[1], d, LSM_AT(outer[1], i, j) / h_outer[1])
+                       : pchip_slope(h_outer[0], 1.0, LSM_AT(outer[0], i, j) / h_outer[0], d);
         else if (outer[other] || end[other])
-          *pm = pchip_edge_slope(H, h_outer[other], d,
-                                 outer[other] ? LSM_AT(outer[other], i, j) : end_secant[other]);
+          slope = pchip_edge_slope(1.0, h_outer[other], d,
+                                   outer[other] ? LSM_AT(outer[other], i, j) / h_outer[other]
+                                                : end_secant[other]);
         else
-          *pm = d;
+          slope = d;
+        LSM_AT(m, i, j) = (float)slope; /* at most 3 |d| */
       }
   }
   return st;
@@ -777,7 +780,8 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
 
 /* Adds the monotone cubic's departure from the linear interpolant at s:
  *   Phi_cubic(s) - Phi_linear(s) = H [h10(s) (m_A - delta) + h11(s) (m_B - delta)],
- * delta = (phi_B - phi_A) / H.  It vanishes at s = 0 and 1, and its s-slope
+ * delta = (phi_B - phi_A) / H (held as H m, so no division by H).  It
+ * vanishes at s = 0 and 1, and its s-slope
  * there makes the z-slope of the result the PCHIP slope m — the same on both
  * sides of an input slice, so the profile is C1 across slices.  The sum is
  * kept within [min(phi_A, phi_B), max(phi_A, phi_B)]: the cubic alone never
@@ -788,13 +792,13 @@ static void gap_add_cubic(const gap *g, double s, lsm_grid *field) {
   if (!g->slope_a) return;
   double h00, h10, h01, h11;
   hermite_basis(s, &h00, &h10, &h01, &h11);
-  const float H = (float)g->f.H, c10 = (float)h10 * H, c11 = (float)h11 * H;
+  const float c10 = (float)h10, c11 = (float)h11; /* slopes are per gap (times H) */
   for (int j = 0; j < field->ny; ++j) {
     const float *pa = &LSM_AT(g->phi_a, 0, j), *pb = &LSM_AT(g->phi_b, 0, j);
     const float *ma = &LSM_AT(g->slope_a, 0, j), *mb = &LSM_AT(g->slope_b, 0, j);
     float *o = &LSM_AT(field, 0, j);
     for (int i = 0; i < field->nx; ++i) {
-      const float d = (pb[i] - pa[i]) / H;
+      const float d = pb[i] - pa[i];
       const float v = o[i] + (c10 * (ma[i] - d) + c11 * (mb[i] - d)); /* a sum symmetric in A, B */
       o[i] = lsm_minf(lsm_maxf(v, lsm_minf(pa[i], pb[i])), lsm_maxf(pa[i], pb[i]));
     }

@@ -511,6 +511,56 @@ static void test_end_parts(void **state) {
 }
 
 /* ------------------------------------------------------------------------ */
+/* units: the same stack in pixel sizes and spacings far apart in scale      */
+
+/* The shape at a fraction of a gap does not depend on the units: with pixel
+ * size p and heights scaled by q every output mask is that of p = q = 1, also
+ * where p / q is far outside a float's range (the PCHIP slopes, held per unit
+ * z, overflowed there: 1e19 / 1e-19 filled the cubic's slices). */
+static void test_scale_invariance(void **state) {
+  (void)state;
+  const slice_def defs[6] = {{0, {{0}}},
+                             {1, {disc(C - 6, C, 8)}},
+                             {1, {disc(C, C, 20)}},
+                             {1, {disc(C + 4, C, 12)}},
+                             {1, {disc(C + 6, C - 3, 6)}},
+                             {0, {{0}}}};
+  const double z1[6] = {0, 4, 9, 12, 18, 20};
+  const double scales[3][2] = {{1.0, 1.0}, {1e19, 1e-19}, {1e-20, 1e20}}; /* pixel, height */
+  const lsm_method methods[2] = {LSM_METHOD_LS, LSM_METHOD_BLEND};
+  for (int m = 0; m < 2; ++m) {
+    run ref;
+    memset(&ref, 0, sizeof ref);
+    for (int k = 0; k < 3; ++k) {
+      double z[6];
+      for (int i = 0; i < 6; ++i) z[i] = z1[i] * scales[k][1];
+      lsm_stack_opts o;
+      default_opts(&o);
+      o.method = methods[m];
+      o.pixel_size = scales[k][0];
+      o.dz = scales[k][1];
+      run r;
+      assert_int_equal(run_stack(&r, W, H, 0, defs, z, 6, &o), LSM_OK);
+      if (k == 0) {
+        ref = r;
+        assert_int_equal(ref.sink.n, 21);
+        continue;
+      }
+      assert_int_equal(r.sink.n, ref.sink.n);
+      size_t differ = 0;
+      for (size_t i = 0; i < r.sink.n; ++i)
+        for (int c = 0; c < W * H; ++c)
+          differ += (r.sink.s[i].phi[c] <= 0.0f) != (ref.sink.s[i].phi[c] <= 0.0f);
+      if (differ)
+        fail_msg("%s, pixel %g, heights x %g: %zu cells differ from pixel 1, heights x 1",
+                 m ? "blend" : "ls", scales[k][0], scales[k][1], differ);
+      sink_free(&r.sink);
+    }
+    sink_free(&ref.sink);
+  }
+}
+
+/* ------------------------------------------------------------------------ */
 /* thin features of the outside move like those of the inside                */
 
 /* The last inside pixel's column along row y, from x_from rightward (-1: none). */
@@ -1077,6 +1127,7 @@ int main(void) {
       cmocka_unit_test(test_merge_split),
       cmocka_unit_test(test_thin_outside),
       cmocka_unit_test(test_pinhole),
+      cmocka_unit_test(test_scale_invariance),
       cmocka_unit_test(test_branch_recedes),
       cmocka_unit_test(test_end_parts),
       cmocka_unit_test(test_vanish_appear),
