@@ -1103,7 +1103,7 @@ static lsm_status run_gap_regular(stack_run *r, const window *w, const double *z
   LSM_TRY(gap_setup(r, w, &g, err));
   lsm_status st = LSM_OK;
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
-  ps->aligned = g.f.aligned;
+  ps->aligned = g.f.aligned || g.f.end_aligned; /* an end moving on with the pair beyond */
   ps->moving_parts = g.parts;
   if ((a->empty && b->empty) || g.rest_empty) {
     lsm_grid_fill(g.phi_a, g.f.clamp);
@@ -1144,7 +1144,7 @@ static lsm_status run_gap_iterations(stack_run *r, const window *w, lsm_pair_sta
   gap g;
   LSM_TRY(gap_setup(r, w, &g, err));
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
-  ps->aligned = g.f.aligned;
+  ps->aligned = g.f.aligned || g.f.end_aligned; /* an end moving on with the pair beyond */
   ps->moving_parts = g.parts;
   /* An empty source has no front to move: morph the target into the empty
    * slice instead (it shrinks to nothing) and emit its iterates in reverse.

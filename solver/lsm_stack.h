@@ -178,7 +178,8 @@ typedef struct lsm_pair_stats {
   long long cells;        /* grid cells updated per iteration */
   size_t slices;          /* intermediate slices emitted */
   int hit_max_iter;       /* 1 if max_iter stopped the pair early */
-  int aligned;            /* 1 if the pair was hull-aligned (--align hull, or chosen by auto) */
+  int aligned;            /* 1 if the pair was hull-aligned (--align hull, or chosen by auto),
+                             or the object ends in the gap moving with the aligned pair beyond */
   int moving_parts;       /* parts that moved off their place, morphed on their own (lsm_parts) */
   /* --method pls (both morphs of a two-sided pair added up) */
   long long pls_seeded;     /* particles seeded */

@@ -511,6 +511,32 @@ static void test_end_parts(void **state) {
 }
 
 /* ------------------------------------------------------------------------ */
+/* an end that moves on                                                      */
+
+/* A disc drifting 2 px per unit z (an oblique vessel) and ending in the last
+ * gap: with --align auto the end keeps moving along the drift, and run.json's
+ * "aligned" says so for that gap as for the others. */
+static void test_end_moves_on(void **state) {
+  (void)state;
+  const slice_def defs[5] = {{1, {disc(20, C, 5)}}, {1, {disc(36, C, 5)}}, {1, {disc(52, C, 5)}},
+                             {1, {disc(68, C, 5)}}, {0, {{0}}}};
+  const double z[5] = {0, 8, 16, 24, 32};
+  lsm_stack_opts o;
+  default_opts(&o);
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z, 5, &o), LSM_OK);
+  assert_int_equal(r.sink.n, 33);
+  for (int k = 0; k < 4; ++k)
+    if (!r.stats[k].aligned) fail_msg("gap %d: aligned = 0", k + 1);
+  double cx[8], cy[8];
+  assert_int_equal(components(r.sink.s[27].phi, W, H, 1, 1, 0, cx, cy), 1);
+  print_message("end moves on: centroid at z = 27: %.1f (the last section's 68, the drift's 74)\n",
+                cx[0]);
+  assert_true(fabs(cx[0] - 74.0) <= 1.0);
+  sink_free(&r.sink);
+}
+
+/* ------------------------------------------------------------------------ */
 /* units: the same stack in pixel sizes and spacings far apart in scale      */
 
 /* The shape at a fraction of a gap does not depend on the units: with pixel
@@ -1128,6 +1154,7 @@ int main(void) {
       cmocka_unit_test(test_thin_outside),
       cmocka_unit_test(test_pinhole),
       cmocka_unit_test(test_scale_invariance),
+      cmocka_unit_test(test_end_moves_on),
       cmocka_unit_test(test_branch_recedes),
       cmocka_unit_test(test_end_parts),
       cmocka_unit_test(test_vanish_appear),
