@@ -1277,8 +1277,8 @@ static lsm_status buffer_emit(void *ctx, const float *phi, int width, int height
                               long input_index, lsm_err *err) {
   lsm_gap_result *b = ctx;
   const size_t cells = (size_t)width * (size_t)height;
-  if ((b->count & (b->count - 1)) == 0) { /* grow at powers of two */
-    const size_t cap = b->count ? 2 * b->count : 1;
+  if (b->count == b->cap) { /* the expected count at once, else doubling */
+    const size_t cap = b->cap ? 2 * b->cap : b->reserve ? b->reserve : 1;
     size_t bytes;
     if (!lsm_size_mul(cap, cells * sizeof(float), &bytes))
       return lsm_fail(err, LSM_ERR_LIMIT, NULL, "gap buffer size overflows");
@@ -1291,6 +1291,7 @@ static lsm_status buffer_emit(void *ctx, const float *phi, int width, int height
     long *in = realloc(b->input, cap * sizeof *in);
     if (!in) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot buffer the slices of a gap");
     b->input = in;
+    b->cap = cap;
   }
   memcpy(b->phi + b->count * cells, phi, cells * sizeof(float));
   b->z[b->count] = z;
@@ -1485,6 +1486,9 @@ static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan,
     slice_free(&a);
     slice_free(&b);
   } else if (st == LSM_OK) {
+    /* its slices on the output grid, and the last input slice (an upper
+     * bound): buffered in one allocation of the size gap_workers planned */
+    res->reserve = plan->last - plan->first + 1;
     st = gap_task(&task, i, plan, g, &res->stats, &e);
   }
   res->status = st;

@@ -196,6 +196,8 @@ typedef struct lsm_gap_result {
   lsm_status status;
   char msg[LSM_ERR_MSG_MAX];
   size_t count;
+  size_t cap;     /* slices allocated (while buffering) */
+  size_t reserve; /* slices expected, allocated at once (0: unknown, grown by doubling) */
   int width, height;
   float *phi;
   double *z;
