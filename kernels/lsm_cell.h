@@ -34,6 +34,8 @@
  * callers never pass NaN; a NaN in phi is caught by the driver). */
 LSM_FN float lsm_maxf(float a, float b) { return a > b ? a : b; }
 LSM_FN float lsm_minf(float a, float b) { return a < b ? a : b; }
+/* One strictly positive and the other strictly negative. */
+LSM_FN int lsm_opposite(float a, float b) { return (a > 0.0f && b < 0.0f) || (a < 0.0f && b > 0.0f); }
 
 /* ---- First-order Godunov upwind (Rouy & Tourin 1992; Osher & Fedkiw ch. 6) -----
  * Numerical Hamiltonian for F |grad phi| with the speed F known at the cell,
@@ -96,8 +98,20 @@ LSM_FN float lsm_cfl_rate(float F, float dxm, float dxp, float dym, float dyp, f
  * (1-px stripes) is not flat a few steps later. */
 LSM_FN float lsm_cfl_rate_of(int roefix, float F, float dxm, float dxp, float dym, float dyp,
                              float inv_dx, float inv_dy) {
-  if (!roefix) return lsm_cfl_rate(F, dxm, dxp, dym, dyp, inv_dx, inv_dy);
   const int flat = dxm == 0.0f && dxp == 0.0f && dym == 0.0f && dyp == 0.0f;
+  if (!roefix) {
+    const float rate = lsm_cfl_rate(F, dxm, dxp, dym, dyp, inv_dx, inv_dy);
+    if (inv_dx == inv_dy || flat) return rate;
+    /* Unequal spacing: the pairwise rate read from phi_0's gradient can grow
+     * by up to max(dx, dy) / min(dx, dy) once the front turns (a band along
+     * the coarse axis morphing into a disc blew up at dx = 1, dy = 4); the
+     * step is fixed from phi_0, so take the largest over all directions,
+     * |F| sqrt(1/dx^2 + 1/dy^2), written so that no square overflows.
+     * Square pixels keep the pairwise rate (at most sqrt 2 below that bound,
+     * measured stable at the default cfl). */
+    const float a = lsm_maxf(inv_dx, inv_dy), t = lsm_minf(inv_dx, inv_dy) / a;
+    return lsm_maxf(rate, LSM_FABS(F) * a * LSM_SQRT(1.0f + t * t));
+  }
   return flat ? 0.0f : LSM_FABS(F) * (inv_dx + inv_dy);
 }
 
@@ -232,8 +246,10 @@ LSM_FN float lsm_godunov_grad(float s, float dxm, float dxp, float dym, float dy
 LSM_FN float lsm_reinit_cell(float phi, float phi0, float l0, float r0, float d0, float u0,
                              float dxm, float dxp, float dym, float dyp, float inv_dx,
                              float inv_dy, float h, float dtau) {
-  int interface = (phi0 * l0 < 0.0f) | (phi0 * r0 < 0.0f) | (phi0 * d0 < 0.0f) |
-                  (phi0 * u0 < 0.0f) | (phi0 == 0.0f);
+  /* signs compared, not multiplied: phi0 * l0 underflows to 0 at pixel sizes
+   * below about 1e-22, and no cell was an interface cell there */
+  int interface = lsm_opposite(phi0, l0) | lsm_opposite(phi0, r0) | lsm_opposite(phi0, d0) |
+                  lsm_opposite(phi0, u0) | (phi0 == 0.0f);
   float s = phi0 > 0.0f ? 1.0f : (phi0 < 0.0f ? -1.0f : 0.0f);
   if (interface) {
     float cx = 0.5f * (r0 - l0) * inv_dx, cy = 0.5f * (u0 - d0) * inv_dy;

@@ -240,25 +240,24 @@ static void test_cfl(void **state) {
   lsm_grid_destroy(&phi);
   lsm_grid_destroy(&tgt);
 
-  /* Anisotropic dx = 0.5, dy = 1, phi = x + y, F = 2: interior p = q = 1,
-   * (2 + 1)/sqrt 2 = 2.1213 beats the boundary combinations (p,0): 2, (0,q): 1.
-   * rate = 2 * 3/sqrt 2 -> dt = cfl sqrt 2 / 6. */
+  /* Anisotropic dx = 0.5, dy = 1, F = 2: the upwind rate is the bound over
+   * all directions, |F| sqrt(1/dx^2 + 1/dy^2) = 2 sqrt 5, whatever phi's
+   * gradient (the step is fixed from phi_0 and the front may turn; the
+   * pairwise rate, (|p|/dx + |q|/dy)/|(p,q)|, stays the per-cell form it
+   * bounds: 3/sqrt 2 for phi = x + y, 2 for x, 1 for y). */
   phi = new_grid(16, 12, 0.5f, 1.0f);
   tgt = new_grid(16, 12, 0.5f, 1.0f);
-  fill_linear(phi, 1.0, 1.0, 0.0);
-  fill_linear(tgt, 1.0, 1.0, -2.0);
-  lsm_cfl_dt(phi, tgt, LSM_SCHEME_UPWIND, 0.75, 1, &dt);
-  assert_close(dt, 0.75 * sqrt(2.0) / 6.0, 1e-6);
-  /* phi = x only on the same grid: rate = 2 / 0.5 -> dt = cfl / 4. */
-  fill_linear(phi, 1.0, 0.0, 0.0);
-  fill_linear(tgt, 1.0, 0.0, -2.0);
-  lsm_cfl_dt(phi, tgt, LSM_SCHEME_UPWIND, 0.75, 1, &dt);
-  assert_close(dt, 0.75 / 4.0, 1e-6);
-  /* phi = y only: rate = 2 / 1 -> dt = cfl / 2. */
-  fill_linear(phi, 0.0, 1.0, 0.0);
-  fill_linear(tgt, 0.0, 1.0, -2.0);
-  lsm_cfl_dt(phi, tgt, LSM_SCHEME_UPWIND, 0.75, 1, &dt);
-  assert_close(dt, 0.75 / 2.0, 1e-6);
+  const double axes[3][2] = {{1.0, 1.0}, {1.0, 0.0}, {0.0, 1.0}};
+  for (int k = 0; k < 3; ++k) {
+    fill_linear(phi, axes[k][0], axes[k][1], 0.0);
+    fill_linear(tgt, axes[k][0], axes[k][1], -2.0);
+    lsm_cfl_dt(phi, tgt, LSM_SCHEME_UPWIND, 0.75, 1, &dt);
+    assert_close(dt, 0.75 / (2.0 * sqrt(5.0)), 1e-6);
+  }
+  assert_close(lsm_cfl_rate(2.0f, 1.0f, 1.0f, 1.0f, 1.0f, 2.0f, 1.0f), 2.0 * 3.0 / sqrt(2.0), 1e-5);
+  assert_close(lsm_cfl_rate_of(0, 2.0f, 1.0f, 1.0f, 1.0f, 1.0f, 2.0f, 1.0f), 2.0 * sqrt(5.0), 1e-5);
+  /* a flat cell still has rate 0 */
+  assert_close(lsm_cfl_rate_of(0, 2.0f, 0.0f, 0.0f, 0.0f, 0.0f, 2.0f, 1.0f), 0.0, 0.0);
   lsm_grid_destroy(&phi);
   lsm_grid_destroy(&tgt);
 
@@ -640,6 +639,56 @@ static void test_cfl_flat_phi(void **state) {
   lsm_grid_destroy(&tgt);
 }
 
+/* Unequal spacing, the step fixed from phi_0 as the morph fixes it: an
+ * 8-row band (its gradient along the coarse axis y, where the pairwise rate
+ * is |F| / dy) morphing into a small disc in a corner; once the front turns,
+ * the rate grows up to |F| sqrt(1/dx^2 + 1/dy^2).  With the pairwise rate
+ * alone the upwind morph went non-finite at step 39 (dx = 1, dy = 4); with
+ * the direction-free bound it stays within its slices' range, either way
+ * round. */
+static void test_upwind_unequal_spacing(void **state) {
+  (void)state;
+  const int n = 48;
+  const float spacing[2][2] = {{1.0f, 4.0f}, {4.0f, 1.0f}};
+  for (int c = 0; c < 2; ++c) {
+    lsm_mask band, corner;
+    lsm_err err;
+    lsm_err_clear(&err);
+    assert_int_equal(lsm_mask_create(n, n, &band, &err), LSM_OK);
+    assert_int_equal(lsm_mask_create(n, n, &corner, &err), LSM_OK);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int along = c == 0 ? j : i; /* across the band: the coarse axis */
+        band.pixels[j * n + i] = along >= 20 && along < 28;
+        corner.pixels[j * n + i] = hypot(i - 5.0, j - 5.0) < 4.0;
+      }
+    lsm_grid *src = new_grid(n, n, spacing[c][0], spacing[c][1]);
+    lsm_grid *tgt = new_grid(n, n, spacing[c][0], spacing[c][1]);
+    assert_int_equal(lsm_sdf_from_mask(&band, src, &err), LSM_OK);
+    assert_int_equal(lsm_sdf_from_mask(&corner, tgt, &err), LSM_OK);
+    const float lo = fminf(lsm_grid_min(src), lsm_grid_min(tgt));
+    const float hi = fmaxf(lsm_grid_max(src), lsm_grid_max(tgt));
+    lsm_morph_opts o;
+    lsm_morph_opts_default(&o);
+    o.scheme = LSM_SCHEME_UPWIND;
+    lsm_morph *m = NULL;
+    assert_int_equal(lsm_morph_create(src, tgt, &o, &m, &err), LSM_OK);
+    for (int step = 0; step < 600; ++step) {
+      assert_int_equal(lsm_morph_step(m, INFINITY, &err), LSM_OK);
+      const lsm_grid *phi = lsm_morph_phi(m);
+      const float mn = lsm_grid_min(phi), mx = lsm_grid_max(phi);
+      if (!(mn >= lo - 1e-3f && mx <= hi + 1e-3f))
+        fail_msg("dx %g, dy %g, step %d: phi in [%g, %g], left [%g, %g]", spacing[c][0],
+                 spacing[c][1], step, mn, mx, lo, hi);
+    }
+    lsm_morph_destroy(&m);
+    lsm_mask_free(&band);
+    lsm_mask_free(&corner);
+    lsm_grid_destroy(&src);
+    lsm_grid_destroy(&tgt);
+  }
+}
+
 /* ------------------------------------------------------------------------ */
 /* integrators                                                               */
 
@@ -905,6 +954,29 @@ static void test_reinit(void **state) {
   lsm_grid_destroy(&phi);
 }
 
+/* The same circle at a pixel size of 1e-25 (the options allow down to
+ * 1e-30): the front stays put.  Interface cells were found by the sign of
+ * phi0 * neighbour, which underflowed to 0 there, and the far-cell update
+ * moved the front by 0.4 px. */
+static void test_reinit_tiny_pixels(void **state) {
+  (void)state;
+  const int n = 64;
+  const double h = 1e-25, r = 15.3;
+  lsm_grid *phi = new_grid(n, n, (float)h, (float)h);
+  fill_circle(phi, 0.4 * h, -0.3 * h, r * h, 3.0);
+  const double r_before = front_radius(phi, 0.4 * h, -0.3 * h, r * h, NULL, NULL) / h;
+  lsm_reinit *re = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_reinit_create(phi, &re, &err), LSM_OK);
+  lsm_reinit_run(re, phi, 40, 1);
+  const double r_after = front_radius(phi, 0.4 * h, -0.3 * h, r * h, NULL, NULL) / h;
+  print_message("reinit at pixel size 1e-25: front radius %.4f -> %.4f px\n", r_before, r_after);
+  assert_close(r_after, r_before, 0.1);
+  lsm_reinit_destroy(&re);
+  lsm_grid_destroy(&phi);
+}
+
 /* ------------------------------------------------------------------------ */
 /* fraction -> time                                                          */
 
@@ -1006,12 +1078,14 @@ int main(void) {
       cmocka_unit_test(test_roefix_cone_apex),
       cmocka_unit_test(test_schemes_monotone),
       cmocka_unit_test(test_cfl_flat_phi),
+      cmocka_unit_test(test_upwind_unequal_spacing),
       cmocka_unit_test(test_integrators_agree),
       cmocka_unit_test(test_front_measure),
       cmocka_unit_test(test_circles_upwind),
       cmocka_unit_test(test_circles_roefix),
       cmocka_unit_test(test_integrators_circle),
       cmocka_unit_test(test_reinit),
+      cmocka_unit_test(test_reinit_tiny_pixels),
       cmocka_unit_test(test_morph_at_rest),
       cmocka_unit_test(test_time_of_fraction),
       cmocka_unit_test(test_morph_dt_and_landing),
