@@ -99,6 +99,12 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
     m->pls_live = (long long)set.n;
   }
   if (st == LSM_OK) st = m->ops->cfl_dt(m->state, opts->scheme, opts->cfl, &m->dt, err);
+  /* a rate that overflowed a float gives a step of 0: no step could advance
+   * the morph (lsm_morph_advance_to would never arrive) */
+  if (st == LSM_OK && !(m->dt > 0.0))
+    st = lsm_fail(err, LSM_ERR_NUMERIC, NULL,
+                  "morph: the CFL time step is %g (speeds or gradients too large for floats)",
+                  m->dt);
   if (st == LSM_OK) st = morph_residual(m, &m->residual, err);
   if (st == LSM_OK && !isfinite(m->residual))
     st = lsm_fail(err, LSM_ERR_NUMERIC, NULL, "morph: the initial fields are not finite");
@@ -186,6 +192,10 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
     double dt_now;
     LSM_TRY(m->ops->cfl_dt(m->state, m->opts.scheme, m->opts.cfl, &dt_now, err));
     if (dt_now < m->dt) m->dt = dt_now;
+    if (!(m->dt > 0.0))
+      return lsm_fail(err, LSM_ERR_NUMERIC, NULL,
+                      "iteration %d: the CFL time step after reinitialisation is %g",
+                      m->iterations, m->dt);
   }
   if (m->opts.track_cp || m->iterations % 16 == 0) {
     double residual;

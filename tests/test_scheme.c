@@ -1038,6 +1038,26 @@ static void test_morph_dt_and_landing(void **state) {
   lsm_grid_destroy(&tgt);
 }
 
+/* A speed too large for floats (|F| / dx past 3.4e38): the CFL step is 0,
+ * and no step could advance the morph; creating it fails with a numeric
+ * error instead of a morph that never arrives. */
+static void test_morph_step_zero(void **state) {
+  (void)state;
+  lsm_grid *src = new_grid(16, 16, 1e-3f, 1e-3f), *tgt = new_grid(16, 16, 1e-3f, 1e-3f);
+  fill_linear(src, 1.0, 0.0, 0.0);
+  fill_linear(tgt, 1.0, 0.0, -3e38);
+  lsm_morph_opts o;
+  lsm_morph_opts_default(&o);
+  lsm_morph *m = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_morph_create(src, tgt, &o, &m, &err), LSM_ERR_NUMERIC);
+  assert_null(m);
+  assert_non_null(strstr(err.msg, "CFL time step"));
+  lsm_grid_destroy(&src);
+  lsm_grid_destroy(&tgt);
+}
+
 /* Identical slices: nothing can move (dt infinite), so every time is reached
  * at once, with no step, whatever max_iter allows. */
 static void test_morph_at_rest(void **state) {
@@ -1087,6 +1107,7 @@ int main(void) {
       cmocka_unit_test(test_reinit),
       cmocka_unit_test(test_reinit_tiny_pixels),
       cmocka_unit_test(test_morph_at_rest),
+      cmocka_unit_test(test_morph_step_zero),
       cmocka_unit_test(test_time_of_fraction),
       cmocka_unit_test(test_morph_dt_and_landing),
   };
