@@ -138,6 +138,28 @@ typedef struct png_source {
   lsm_png_read_opts read;
 } png_source;
 
+/* A note when the first slice with foreground has black pixels and at
+ * least as many that are non-zero but below 50 % as at or above it: not the
+ * grey edge of a drawn mask (nor a dark grey background, with no black) but
+ * a label map on 0 (labels 1, 2, ... with some at 128 or more), whose dark
+ * labels read as background. */
+static lsm_status note_dark_labels(const char *path, const lsm_png_read_opts *ro, size_t bright,
+                                   lsm_err *err) {
+  lsm_png_read_opts any = *ro;
+  any.nonzero = 1;
+  lsm_mask m = {0, 0, NULL};
+  LSM_TRY(lsm_png_read_mask(path, &any, &m, err));
+  const size_t nonzero = lsm_mask_count(&m), all = (size_t)m.width * (size_t)m.height;
+  lsm_mask_free(&m);
+  if (nonzero < all && nonzero - bright >= bright)
+    fprintf(stderr,
+            "lsmorph: note: %s: %zu pixels are non-zero but below 50 %% luminance, more than "
+            "the %zu at or above it; they read as background (for a label map, write a mask "
+            "of the labels wanted)\n",
+            path, nonzero - bright, bright);
+  return LSM_OK;
+}
+
 /* Foreground rule for a stack: luminance >= 50 % (the default), unless no
  * pixel of any slice reaches 50 % while the stack has both zero and non-zero
  * pixels: label masks stored as 0/1 would otherwise all read as empty.  Then
@@ -159,6 +181,7 @@ static lsm_status pick_foreground(char **paths, size_t count, lsm_png_read_opts 
       const size_t fg = ro->invert ? all - inside : inside;
       if (pass == 0 && fg > 0) { /* some pixel reaches 50 % */
         none_reach_half = 0;
+        if (!quiet && !ro->invert) LSM_TRY(note_dark_labels(paths[k], ro, fg, err));
         break;
       }
       if (pass == 1) {

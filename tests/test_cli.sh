@@ -366,6 +366,17 @@ check "0/1 label masks: exit 0" [ $? -eq 0 ]
 check "0/1 label masks: a note says non-zero pixels are foreground" grep -q "non-zero pixels as foreground" "$TMP/lab.err"
 "$LSM" reconstruct "$TMP/lab255" -o "$TMP/out-lab255" --spacing 4 --no-preview -q
 check "0/1 label masks: same volume as 0/255 masks" cmp -s "$TMP/out-lab01/volume.nrrd" "$TMP/out-lab255/volume.nrrd"
+# a label map (labels 1 and 200): the dark label reads as background, and a note says so;
+# a drawn mask (0/255 with no dark grey) gets no such note
+mkdir -p "$TMP/labmap"
+printf 'labels %s 48 14\nlabels %s 48 9\n' "$TMP/labmap/1.png" "$TMP/labmap/2.png" |
+  /usr/bin/python3 tests/make_png.py -
+"$LSM" reconstruct "$TMP/labmap" -o "$TMP/out-labmap" --spacing 4 --no-preview 2>"$TMP/lab.err"
+check "label map: exit 0" [ $? -eq 0 ]
+check "label map: a note says the dark labels read as background" \
+  grep -q "labmap/1.png: [0-9]* pixels are non-zero but below 50 % luminance" "$TMP/lab.err"
+"$LSM" reconstruct "$TMP/lab255" -o "$TMP/out-lab255b" --spacing 4 --no-preview 2>"$TMP/lab.err"
+check "0/255 masks: no label-map note" sh -c "! grep -q 'below 50 % luminance' '$TMP/lab.err'"
 # also when the only non-empty 0/1 slice is full (no slice has a boundary): it read as empty
 mkdir -p "$TMP/labfull01" "$TMP/labfull255"
 printf 'label01 %s 24 0.1\nlabel01 %s 24 99\nlabel01 %s 24 0.1\nempty %s 24\ngray8 %s 24 99\nempty %s 24\n' \
