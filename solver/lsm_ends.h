@@ -70,8 +70,9 @@
  *     short ends that stay flat lose 0.02 to 0.04, four stacks gain).
  *     However fast the line, the parabola or the per-cell
  *     trend close an end, it keeps a tenth of the tip, A_F (2 (1 - sigma))^p
- *     / 10 cells (the deepest of F's, lowering the field if the trend took
- *     them, never past F; cells tied with the last one kept stay): the
+ *     / 10 cells (the deepest of the trended field, F's deepest where the
+ *     trend is uniform, lowering the field if the trend took them, never
+ *     past F; cells tied with the last one kept stay): the
  *     object is known to reach at least the section next to F, and a
  *     held-out slice left empty where it still is costs the 95 % Hausdorff
  *     distance the image size for its outline.  organs.py every 8th: 3.1
