@@ -1261,7 +1261,10 @@ size_t lsm_stack_output_count(const double *z, size_t count, double dz) {
   const double span = z[count - 1] - z[0];
   const double n0 = floor((span + g.eps) / dz);
   if (!(n0 >= 0.0)) return 0;
-  if (n0 >= (double)LSM_OUTPUT_COUNT_MAX / 2) return LSM_OUTPUT_COUNT_MAX; /* callers refuse such runs */
+  /* not reached by callers that first check lsm_output_step_resolved (lsm_stack_run, the
+   * CLI): a step of at least 8 units in the last place of the heights gives at most
+   * about 6e14 slices */
+  if (n0 >= (double)LSM_OUTPUT_COUNT_MAX / 2) return LSM_OUTPUT_COUNT_MAX;
   /* the division rounds: settle n by the test the gaps use */
   size_t n = (size_t)n0;
   while (grid_not_above(&g, n + 1, z[count - 1])) ++n;
