@@ -24,7 +24,8 @@ static const char general_help[] =
     "  devices       list the OpenCL platforms and devices\n"
     "\n"
     "Run 'lsmorph help reconstruct' for the options.  Every option also takes the\n"
-    "form --name=value.\n";
+    "form --name=value; after '--' every argument is a folder (for names that\n"
+    "start with '-').\n";
 
 static const char reconstruct_help[] =
     "Usage: lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
@@ -308,9 +309,14 @@ static void cli_defaults(lsm_cli *cli) {
 
 static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   lsm_stack_opts *so = &cli->stack;
+  int options = 1; /* until "--": after it every argument is SLICE_DIR */
   for (; c->i < c->argc; ++c->i) {
     const char *arg = c->argv[c->i];
-    if (arg[0] != '-' || strcmp(arg, "-") == 0) {
+    if (options && strcmp(arg, "--") == 0) {
+      options = 0;
+      continue;
+    }
+    if (!options || arg[0] != '-' || strcmp(arg, "-") == 0) {
       if (cli->slice_dir)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "unexpected argument '%s' (one SLICE_DIR only)", arg);
       cli->slice_dir = arg;
@@ -487,19 +493,23 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
 }
 
 static lsm_status parse_score(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
+  int options = 1; /* until "--": after it every argument is a folder */
   for (; c->i < c->argc; ++c->i) {
     const char *arg = c->argv[c->i];
-    if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
+    const int option = options && arg[0] == '-';
+    if (option && strcmp(arg, "--") == 0) {
+      options = 0;
+    } else if (option && (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0)) {
       cli->command = LSM_CMD_HELP;
       cli->help_topic = "score";
       return LSM_OK;
-    } else if (strncmp(arg, "--stride", 8) == 0 && (arg[8] == '\0' || arg[8] == '=')) {
+    } else if (option && strncmp(arg, "--stride", 8) == 0 && (arg[8] == '\0' || arg[8] == '=')) {
       const char *v = NULL;
       LSM_TRY(take_value(c, "--stride", arg[8] == '=' ? arg + 9 : NULL, &v, err));
       long n;
       LSM_TRY(parse_int("--stride", v, 2, 1000000, &n, err));
       cli->stride = (int)n;
-    } else if (arg[0] == '-') {
+    } else if (option) {
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s' (see 'lsmorph help score')", arg);
     } else if (!cli->truth_dir) {
       cli->truth_dir = arg;

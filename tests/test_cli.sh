@@ -331,6 +331,14 @@ assert d["input"]["heights"] == [1000000.1234567, 1000001.1234567], d["input"]["
 assert d["output"]["first_height"] == 1000000.1234567, d["output"]
 ' "$TMP/out-odd/run.json"
 fi
+# "--" ends the options: a folder whose name starts with '-'
+cp -r "$ODD" "$TMP/-dash"
+ABS_LSM=$(cd "$(dirname "$LSM")" && pwd)/$(basename "$LSM")
+(cd "$TMP" && "$ABS_LSM" reconstruct -o out-dash --method blend --no-preview -q -- -dash) >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "reconstruct -- -dash exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+(cd "$TMP" && "$ABS_LSM" score --stride 2 -- -dash out-dash) >"$TMP/o" 2>"$TMP/e"
+check "score --stride 2 -- -dash OUT reads -dash as the truth folder" grep -q -- "-dash: 2 PNG files" "$TMP/e"
 # --seed takes any 64-bit unsigned value
 "$LSM" reconstruct "$NAT" -o "$TMP/out-seed" --input outline --spacing 4 --method pls \
   --seed 18446744073709551615 --no-preview -q >"$TMP/o" 2>"$TMP/e"
