@@ -145,12 +145,27 @@ static int32_t edge_vertex(lsm_mesh *m, int i, int j, long p, int d, int32_t *sl
   const double za = m->pz[p % RING], zb = m->pz[p2 % RING];
   const double xa = (i - 1) * m->sx, ya = (j - 1) * m->sy;
   const double xb = (i2 - 1) * m->sx, yb = (j2 - 1) * m->sy;
-  double ga[3], gb[3], n[3];
-  node_gradient(m, i, j, p, ga);
-  node_gradient(m, i2, j2, p2, gb);
-  for (int c = 0; c < 3; ++c) n[c] = ga[c] + t * (gb[c] - ga[c]);
+  double ga[3], gb[3], n[3] = {0.0, 0.0, 0.0};
+  const int pad_a = is_pad(m, i, j, p), pad_b = is_pad(m, i2, j2, p2);
+  if (pad_a != pad_b) {
+    /* a vertex on a cap (an edge into the pad layer) lies on a face of the
+     * volume's box (an edge or corner of it for a diagonal edge): its normal
+     * is that face's, out of the box along each axis on which the pad end
+     * lies in the pad layer (the gradient there is taken across the
+     * mirrored pad values and could point inward) */
+    const int pi = pad_a ? i : i2, pj = pad_a ? j : j2;
+    const long pp = pad_a ? p : p2;
+    n[0] = pi == 0 ? -1.0 : pi == m->w - 1 ? 1.0 : 0.0;
+    n[1] = pj == 0 ? -1.0 : pj == m->h - 1 ? 1.0 : 0.0;
+    n[2] = pp == 0 ? -1.0 : pp == m->pad_top ? 1.0 : 0.0;
+  } else {
+    node_gradient(m, i, j, p, ga);
+    node_gradient(m, i2, j2, p2, gb);
+    for (int c = 0; c < 3; ++c) n[c] = ga[c] + t * (gb[c] - ga[c]);
+  }
   double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  if (!(len > 1e-30) || !isfinite(len)) { /* flat: point from the inside end to the outside one */
+  if (!(len > 1e-30) || !isfinite(len)) {
+    /* flat: point from the inside end to the outside one */
     double s = va <= 0.0 ? 1.0 : -1.0;
     n[0] = s * (xb - xa);
     n[1] = s * (yb - ya);

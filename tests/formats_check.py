@@ -278,6 +278,14 @@ def check(args):
                and flat_hi.sum() > 8,
                "caps half a slice step beyond the first and last slices: z %.4f .. %.4f, want %.4f .. %.4f "
                "(%d and %d vertices on them)" % (zmin, zmax, z_lo, z_hi, flat_lo.sum(), flat_hi.sum()))
+        # vertex normals on the caps point out of the box: those on the lower cap down,
+        # the upper cap's up (they were the gradient across the mirrored pad, some inward)
+        normals = mesh.GetPointData().GetNormals()
+        if normals is not None:
+            nz_ = vtk_to_numpy(normals).astype(np.float64)[:, 2]
+            wrong = int((nz_[flat_lo] > -0.99).sum() + (nz_[flat_hi] < 0.99).sum())
+            report(wrong == 0, "cap vertices have normals (0, 0, -1) below and (0, 0, 1) above "
+                   "(%d do not)" % wrong)
     if "--ball" not in opts:
         return
     # ---- the ball: isosurface volume against the ball's and the mesh's ----
