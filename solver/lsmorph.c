@@ -71,7 +71,9 @@ static void on_stop_signal(int sig) { stop_signal = sig; }
  * stuck run can still be killed).  A signal ignored when we started (SIGINT of
  * a background job of a shell without job control, nohup's SIGHUP) stays
  * ignored.  SIGPIPE is ignored: progress on stderr piped into a reader that
- * quit is not worth a half-written result.
+ * quit is not worth a half-written result.  So is SIGXFSZ: past a file-size
+ * limit (ulimit -f) the write fails with EFBIG and the error path removes the
+ * temporary folder, where the signal's default action left it behind.
  *
  * While the input is read (restart 0) a signal interrupts a blocking call: a
  * --heights FIFO whose writer never comes (`--heights <(cmd)` with a failed
@@ -84,6 +86,7 @@ static void install_stop_handlers(int restart) {
   ign.sa_handler = SIG_IGN;
   sigemptyset(&ign.sa_mask);
   sigaction(SIGPIPE, &ign, NULL);
+  sigaction(SIGXFSZ, &ign, NULL); /* past a file-size limit a write fails (EFBIG) instead */
   const int sigs[3] = {SIGINT, SIGTERM, SIGHUP};
   for (int k = 0; k < 3; ++k) {
     struct sigaction old, sa;

@@ -406,6 +406,14 @@ if leftovers; then bad "file-size limit: a temporary folder was left"; else ok; 
 )
 rc=$?
 if [ $rc -eq 1 ] && [ ! -e fresh ] && ! leftovers; then ok; else bad "file-size limit, new OUT: exit $rc, fresh exists: $([ -e fresh ] && echo yes)"; fi
+# the same without ignoring SIGXFSZ first: its default action (exit 153) would
+# leave the temporary folder; lsmorph ignores it and fails the write instead
+(
+  ulimit -f 40
+  "$LSM" reconstruct med -o fresh2 -q >"$TMP/stdout" 2>"$TMP/stderr"
+)
+rc=$?
+if [ $rc -eq 1 ] && [ ! -e fresh2 ] && ! leftovers; then ok; else bad "file-size limit, SIGXFSZ not ignored: exit $rc, fresh2 exists: $([ -e fresh2 ] && echo yes), left: $(ls -d ./*.tmp-* 2>/dev/null)"; fi
 
 # ---- disk full: ENOSPC on a 64 KB tmpfs (only where root may mount one) ------------------------------------
 if [ "$(id -u)" -eq 0 ] && mkdir full && mount -t tmpfs -o size=64k tmpfs full 2>/dev/null; then
