@@ -480,7 +480,9 @@ static lsm_status write_render(lsm_preview *p, const char *path, lsm_err *err) {
   double hmin = v.h[0] < v.h[1] ? v.h[0] : v.h[1];
   if (v.h[2] < hmin) hmin = v.h[2];
   const double fine = 0.4 * hmin;
-  const double far = 4.0 * (ext_r + ext_u) + 1.0;
+  /* rays start well outside the box, in its own units (a constant 1 lost all
+   * precision at pixel sizes of 1e-12 and below) */
+  const double far = 4.0 * (ext_r + ext_u) + hmin;
   const int W = im.w, H = im.h;
 
 #pragma omp parallel for schedule(dynamic, 4)

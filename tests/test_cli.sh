@@ -205,6 +205,16 @@ for interp in linear cubic; do
   done
 done
 
+# the 3D preview is drawn in the volume's own units: the same picture at any scale (its rays
+# started one unit out, which lost all precision at pixel sizes of 1e-12 and below)
+for e in 0 -60; do
+  "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-unit-prev$e" --no-slices -q \
+    --spacing "$(awk -v e=$e 'BEGIN { printf "%.17g", 8 * 2 ^ e }')" \
+    --pixel-size "$(awk -v e=$e 'BEGIN { printf "%.17g", 2 ^ e }')" >"$TMP/o" 2>&1
+done
+check "preview3d.png at pixel size 2^-60 is the one at 1" \
+  cmp -s "$TMP/out-unit-prev0/preview3d.png" "$TMP/out-unit-prev-60/preview3d.png"
+
 # An output height a rounding error away from an input height far from zero is that input
 # slice: the grid tests compare offsets from the first height, not heights (a height of 7e7
 # with --dz 0.01 gave a gap's last fraction as -7e-7 and ran the morph to --max-iter).
