@@ -119,14 +119,17 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
 
 /* Reseeding of a set that runs on the backend, on the host: phi comes down,
  * the host set seeds its next generation on it (the same particles as the C
- * path's reseeding at this step), and the new set goes up. */
-static lsm_status device_reseed(lsm_morph *m, lsm_err *err) {
+ * path's reseeding at this step), and the new set goes up.  The backend's set
+ * still holds the strays its last correction found (the C path removes them
+ * as it reseeds and counts them as left the domain): `strays` of the live. */
+static lsm_status device_reseed(lsm_morph *m, long long strays, lsm_err *err) {
   LSM_TRY(m->ops->download(m->state, m->phi_host, err));
   const lsm_pls_stats before = *lsm_pls_stats_get(m->pls);
   LSM_TRY(lsm_pls_reseed(m->pls, m->phi_host, err));
   const lsm_pls_stats *after = lsm_pls_stats_get(m->pls);
   lsm_pls_stats *q = &m->pls_stats;
-  q->reseed_dropped += m->pls_live;
+  q->left_domain += strays;
+  q->reseed_dropped += m->pls_live - strays;
   q->reseeds++;
   q->seeded += after->seeded - before.seeded;
   q->discarded += after->discarded - before.discarded;
@@ -156,7 +159,7 @@ static lsm_status device_correct(lsm_morph *m, lsm_err *err) {
                     "particles: the %s backend holds %lld live particles, %lld expected",
                     m->ops->name, c.live, m->pls_live);
   if (m->opts.pls.reseed_every > 0 && q->steps % m->opts.pls.reseed_every == 0)
-    LSM_TRY(device_reseed(m, err));
+    LSM_TRY(device_reseed(m, c.stray, err));
   return LSM_OK;
 }
 

@@ -698,6 +698,10 @@ static const pls_case pls_cases[] = {
     {LSM_SCHEME_UPWIND, LSM_TIME_RK2, 25, 1, 96, 80, 1.0f, 1.0f, 1},
     /* unequal spacing, no multiple of any work-group */
     {LSM_SCHEME_ROEFIX, LSM_TIME_RK3, 40, 1, 53, 131, 0.5f, 0.75f, 1},
+    /* reseeding on a step whose correction found strays: the backend's set
+     * still holds them, the C path removes them as it reseeds (left the
+     * domain, not dropped by the reseed) */
+    {LSM_SCHEME_UPWIND, LSM_TIME_EULER, 60, 0, 96, 80, 1.0f, 1.0f, 1},
 };
 
 #define PLS(k, name) {name, test_pls_matches_c, NULL, NULL, (void *)&pls_cases[k]}
@@ -733,6 +737,7 @@ int main(void) {
       PLS(6, "pls roe-fix rk2 disc to ellipse"),
       PLS(7, "pls upwind rk2 reseed 25 radius adjust"),
       PLS(8, "pls roe-fix rk3 reseed 40 radius adjust 53x131 dx 0.5 dy 0.75"),
+      PLS(9, "pls upwind euler reseed 60 (strays on a reseed step)"),
   };
   return cmocka_run_group_tests_name("test_opencl", tests, group_setup, group_teardown);
 }
