@@ -120,6 +120,12 @@ compare() {
     awk -v d="$d" -v t="$TOL" 'BEGIN { exit !(d != "size" && d != "nan" && d + 0 <= t + 0) }'
   check "$name: run.json names the opencl backend" \
     grep -q '"backend": {"name": "opencl"' "$TMP/$name-opencl/run.json"
+  # CP of every pair: the residuals before and after the last step are summed on the host (in
+  # double) on both backends (the device's float sum before it gave another CP)
+  grep -o '"cp": [^,]*' "$TMP/$name-c/run.json" >"$TMP/$name-c.cp"
+  grep -o '"cp": [^,]*' "$TMP/$name-opencl/run.json" >"$TMP/$name-opencl.cp"
+  check "$name: run.json's cp agrees ($(diff "$TMP/$name-c.cp" "$TMP/$name-opencl.cp" | head -3))" \
+    cmp -s "$TMP/$name-c.cp" "$TMP/$name-opencl.cp"
   case " $* " in
   *" pls "*)
     # The particle counters of every pair, in order: the same on both backends.
@@ -151,6 +157,8 @@ if "$GEN" pyramid "$TMP/syn" >"$TMP/o" 2>"$TMP/e"; then
 else
   bad "gen_synthetic pyramid failed: $(cat "$TMP/e")"
 fi
+# lengths of 1e20: the device's float sum of (phi - phi_T)^2 overflows, the host's does not
+compare candlestick-1e20 "$SET" --spacing 40e20 --pixel-size 1e20 --dz 10e20
 "$LSM" reconstruct "$SET" -o "$TMP/blend" --backend opencl --method blend \
   --heights "$SET/heights.txt" --dz 10 -q >"$TMP/o" 2>"$TMP/e"
 check "--method blend --backend opencl (host path) exits 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
