@@ -218,8 +218,10 @@ static lsm_status cl_enumerate(cl_dev_ref **out, cl_uint *count, lsm_err *err) {
   if (n == 0) {
     free(refs);
     return lsm_fail(err, LSM_ERR_UNSUPPORTED, NULL,
-                    "OpenCL: %u platform%s but no device found (use --backend c)", nplat,
-                    nplat == 1 ? "" : "s");
+                    "OpenCL: %u platform%s but no device found (use --backend c; PoCL drops its "
+                    "CPU device when it cannot write its kernel cache: set POCL_CACHE_DIR to a "
+                    "writable folder)",
+                    nplat, nplat == 1 ? "" : "s");
   }
   *out = refs;
   *count = n;

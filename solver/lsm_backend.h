@@ -94,13 +94,14 @@ typedef struct lsm_backend {
   char device[256];        /* what runs: "C (2 threads)", "pthread-AMD EPYC ... (PoCL)" */
   double build_seconds;    /* OpenCL program build (or cache load) time */
   int kernel_cache_hit;    /* 1 if the program came from the kernel cache */
+  char fallback[LSM_ERR_MSG_MAX]; /* AUTO on C: why OpenCL could not be opened ("" otherwise) */
 } lsm_backend;
 
 /* The C backend: always available, never fails. */
 const lsm_backend_ops *lsm_backend_c_ops(void);
 
 /* Opens a backend.  kind AUTO picks OpenCL when a device can be opened and
- * C otherwise.  device is the OpenCL device index as listed by
+ * C otherwise (the reason in fallback).  device is the OpenCL device index as listed by
  * lsm_backend_list_devices (-1: the first GPU, else the first device).
  * Failures (no OpenCL platform, build errors) name the device and the cause. */
 lsm_status lsm_backend_open(lsm_backend_kind kind, int device, int threads, lsm_backend **out,

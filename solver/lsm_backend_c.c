@@ -138,6 +138,7 @@ lsm_status lsm_backend_open(lsm_backend_kind kind, int device, int threads, lsm_
       free(b);
       return lsm_fail(err, st, NULL, "%s", cl_err.msg);
     }
+    snprintf(b->fallback, sizeof b->fallback, "%s", cl_err.msg);
   }
   b->ops = lsm_backend_c_ops();
   snprintf(b->device, sizeof b->device, "C (%d thread%s)", threads, threads == 1 ? "" : "s");

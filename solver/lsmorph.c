@@ -894,6 +894,9 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     cli->stack.morph.backend = backend;
     if (!cli->quiet && cli->backend != LSM_BACKEND_C)
       fprintf(stderr, "lsmorph: backend %s: %s\n", backend->ops->name, backend->device);
+    /* auto fell back to C: say why, also when a --device given does not exist */
+    if (!cli->quiet && backend->fallback[0])
+      fprintf(stderr, "lsmorph: note: --backend auto runs on C: %s\n", backend->fallback);
   }
   if (st == LSM_OK) {
     stats = calloc(src.count, sizeof *stats);

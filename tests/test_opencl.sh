@@ -204,5 +204,10 @@ fi
 "$LSM" reconstruct "$SET" -o "$TMP/auto" --backend auto -q --no-preview >"$TMP/o" 2>"$TMP/e"
 check "--backend auto exits 0" [ $? -eq 0 ]
 check "--backend auto ran on OpenCL" grep -q '"backend": {"name": "opencl"' "$TMP/auto/run.json"
+# ... and when it cannot open the device asked for, runs on C and says why
+"$LSM" reconstruct "$SET" -o "$TMP/auto99" --backend auto --device 99 --no-preview >"$TMP/o" 2>"$TMP/e"
+check "--backend auto --device 99 exits 0" [ $? -eq 0 ]
+check "--backend auto --device 99: a note says why it runs on C ($(cat "$TMP/e" | head -3))" \
+  grep -q "note: --backend auto runs on C: OpenCL: device 99 does not exist" "$TMP/e"
 
 finish
