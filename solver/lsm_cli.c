@@ -253,6 +253,21 @@ static lsm_status parse_length(const char *opt, const char *text, double *out, l
   return LSM_OK;
 }
 
+/* A limit counted in `unit` (--max-pixels, --max-voxels): a positive whole
+ * number, any form parse_double takes (2^34 as 17179869184 or 1.7179869184e10),
+ * up to 9e15 (exact in a double). */
+static lsm_status parse_count(const char *opt, const char *text, const char *unit, uint64_t *out,
+                              lsm_err *err) {
+  double d = 0.0;
+  LSM_TRY(parse_double(opt, text, &d, 1, err));
+  if (d != floor(d))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: '%s' is not a whole number of %s", opt, text,
+                    unit);
+  if (d > 9.0e15) return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: %s is more than 9e15", opt, text);
+  *out = (uint64_t)d;
+  return LSM_OK;
+}
+
 static lsm_status parse_int(const char *opt, const char *text, long min, long max, long *out,
                             lsm_err *err) {
   /* digits with an optional leading '-', nothing else (strtol alone would
@@ -452,22 +467,10 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       cli->threads = (int)n;
     } else if (IS("--max-pixels")) {
       NEEDS_VALUE();
-      double d;
-      LSM_TRY(parse_double(name, v, &d, 1, err));
-      if (d != floor(d))
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-pixels: '%s' is not a whole number of pixels", v);
-      if (d > 9.0e15)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-pixels: %s is more than 9e15", v);
-      cli->max_pixels = (uint64_t)d;
+      LSM_TRY(parse_count(name, v, "pixels", &cli->max_pixels, err));
     } else if (IS("--max-voxels")) {
       NEEDS_VALUE();
-      double d;
-      LSM_TRY(parse_double(name, v, &d, 1, err));
-      if (d != floor(d))
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-voxels: '%s' is not a whole number of voxels", v);
-      if (d > 9.0e15)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--max-voxels: %s is more than 9e15", v);
-      cli->max_voxels = (uint64_t)d;
+      LSM_TRY(parse_count(name, v, "voxels", &cli->max_voxels, err));
     } else if (IS("-q") || IS("--quiet")) {
       cli->quiet = 1;
     } else {

@@ -31,7 +31,7 @@ typedef struct lsm_cli {
   int quiet;
   int threads;               /* 0 = all cores */
   uint64_t max_pixels;       /* per slice */
-  uint64_t max_voxels;       /* output volume (default mode) */
+  uint64_t max_voxels;       /* output volume (checked as written with --per-iteration) */
   int write_slices;          /* PNG masks of every output slice */
   lsm_backend_kind backend;  /* --backend (default c) */
   int device;                /* --device N (-1: first GPU, else first device) */
