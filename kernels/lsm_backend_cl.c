@@ -307,7 +307,10 @@ typedef struct cl_ctx {
   size_t local_max;         /* cell kernels' work-group width limit (one row segment) */
   size_t red_local[2];      /* reductions' work-group, a power of two in all */
   int red_run;              /* cells per work-item and row in the reductions */
-  size_t max_group;         /* CL_DEVICE_MAX_WORK_GROUP_SIZE */
+  size_t max_group;         /* CL_DEVICE_MAX_WORK_GROUP_SIZE, lowered to the smallest
+                               CL_KERNEL_WORK_GROUP_SIZE of our kernels (registers, local
+                               memory: a GPU may take fewer work-items per group for a
+                               kernel than for the device) */
   size_t max_items[3];      /* CL_DEVICE_MAX_WORK_ITEM_SIZES, first three dimensions */
   cl_ulong max_alloc, global_mem;
 } cl_ctx;
@@ -529,6 +532,47 @@ static lsm_status build(cl_ctx *c, const char *options, int *hit, lsm_err *err) 
 
 static const lsm_backend_ops cl_ops;
 
+/* The kernels of morph.cl, created per pair (cl_state). */
+enum {
+  K_GHOSTS,
+  K_UPWIND,
+  K_ROEFIX,
+  K_CFL,
+  K_RESIDUAL,
+  K_REINIT,
+  K_PCL_VELOCITY,
+  K_PCL_ADVECT,
+  K_PCL_DETECT,
+  K_PCL_APPLY,
+  K_PCL_RADIUS,
+  K_COUNT
+};
+static const char *const kernel_names[K_COUNT] = {
+    "lsm_fill_ghosts",  "lsm_stage_upwind", "lsm_stage_roefix", "lsm_cfl_partial",
+    "lsm_residual_partial", "lsm_reinit_step", "lsm_pcl_velocity", "lsm_pcl_advect",
+    "lsm_pcl_detect",   "lsm_pcl_apply",    "lsm_pcl_adjust_radius"};
+
+/* Lowers c->max_group to the smallest CL_KERNEL_WORK_GROUP_SIZE of the
+ * kernels: a GPU can take fewer work-items per group for a kernel that uses
+ * many registers than CL_DEVICE_MAX_WORK_GROUP_SIZE says, and a launch past
+ * it fails with CL_INVALID_WORK_GROUP_SIZE. */
+static lsm_status kernel_group_limit(cl_ctx *c, lsm_err *err) {
+  for (int k = 0; k < K_COUNT; ++k) {
+    cl_int e;
+    cl_kernel kernel = clCreateKernel(c->program, kernel_names[k], &e);
+    char call[64];
+    snprintf(call, sizeof call, "clCreateKernel(%s)", kernel_names[k]);
+    if (e != CL_SUCCESS) return cl_fail(err, c->name, call, e);
+    size_t limit = 0;
+    e = clGetKernelWorkGroupInfo(kernel, c->device, CL_KERNEL_WORK_GROUP_SIZE, sizeof limit, &limit,
+                                 NULL);
+    clReleaseKernel(kernel);
+    if (e != CL_SUCCESS) return cl_fail(err, c->name, "clGetKernelWorkGroupInfo", e);
+    if (limit > 0 && limit < c->max_group) c->max_group = limit;
+  }
+  return LSM_OK;
+}
+
 /* Work-group shapes.  Cell kernels: one row segment of up to 256 work-items
  * (LSMORPH_CL_LOCAL=W overrides the 256, for experiments).  Reductions: on
  * CPUs 8 x 1 work-items each covering runs of 128 cells of a row (plain
@@ -614,7 +658,6 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
   }
   if (st == LSM_OK) {
     c->cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
-    pick_local(c);
     char options[256];
     snprintf(options, sizeof options, "-cl-std=CL1.2 -DLSM_GHOST=%d%s%s", LSM_GHOST,
              (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? " -cl-fp32-correctly-rounded-divide-sqrt"
@@ -626,6 +669,8 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
     b->build_seconds = now_seconds() - t0;
     b->kernel_cache_hit = hit;
   }
+  if (st == LSM_OK) st = kernel_group_limit(c, err);
+  if (st == LSM_OK) pick_local(c);
   if (st != LSM_OK) {
     void *p = c;
     cl_close_ctx(&p);
@@ -640,24 +685,6 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
 
 /* ---- per-pair state ------------------------------------------------------------------------- */
 
-enum {
-  K_GHOSTS,
-  K_UPWIND,
-  K_ROEFIX,
-  K_CFL,
-  K_RESIDUAL,
-  K_REINIT,
-  K_PCL_VELOCITY,
-  K_PCL_ADVECT,
-  K_PCL_DETECT,
-  K_PCL_APPLY,
-  K_PCL_RADIUS,
-  K_COUNT
-};
-static const char *const kernel_names[K_COUNT] = {
-    "lsm_fill_ghosts",  "lsm_stage_upwind", "lsm_stage_roefix", "lsm_cfl_partial",
-    "lsm_residual_partial", "lsm_reinit_step", "lsm_pcl_velocity", "lsm_pcl_advect",
-    "lsm_pcl_detect",   "lsm_pcl_apply",    "lsm_pcl_adjust_radius"};
 
 /* The counters of lsm_pcl_detect / lsm_pcl_apply (morph.cl), in this order. */
 enum { PCL_N_ESCAPED, PCL_N_STRAY, PCL_N_REMOVED, PCL_N_LIVE, PCL_N_CORRECTED, PCL_N_COUNT };
