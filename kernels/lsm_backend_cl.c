@@ -746,7 +746,7 @@ static lsm_status new_buffer(cl_state *s, size_t bytes, cl_mem *out, lsm_err *er
   if (e == CL_MEM_OBJECT_ALLOCATION_FAILURE || e == CL_OUT_OF_RESOURCES ||
       e == CL_OUT_OF_HOST_MEMORY || e == CL_INVALID_BUFFER_SIZE)
     return lsm_fail(err, LSM_ERR_NOMEM, NULL,
-                    "OpenCL: %s: out of device memory for a %dx%d grid (%.1f MiB per buffer): "
+                    "OpenCL: %s: out of device memory for a %dx%d grid (a buffer of %.1f MiB): "
                     "clCreateBuffer failed: %s (%d)",
                     s->c->name, s->nx, s->ny, (double)bytes / (1024.0 * 1024.0),
                     cl_error_name(e), (int)e);
