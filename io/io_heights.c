@@ -14,14 +14,6 @@ static int is_space(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
 }
 
-/* Shortest "%.*g" text that reads back as v. */
-static void format_shortest(char *buf, size_t size, double v) {
-  for (int prec = 1; prec <= 17; ++prec) {
-    snprintf(buf, size, "%.*g", prec, v);
-    if (strtod(buf, NULL) == v) return;
-  }
-}
-
 /* A printable, possibly shortened copy of a bad token for messages. */
 static void quote_token(char *out, size_t size, const char *tok) {
   size_t n = strlen(tok), j = 0;
@@ -108,8 +100,8 @@ lsm_status lsm_heights_parse(const char *text, size_t length, const char *name,
     }
     if (n > 0 && !(v > values[n - 1])) {
       char cur[32], prev[32];
-      format_shortest(cur, sizeof cur, v);
-      format_shortest(prev, sizeof prev, values[n - 1]);
+      lsm_shortest_number(cur, sizeof cur, v);
+      lsm_shortest_number(prev, sizeof prev, values[n - 1]);
       st = lsm_fail(err, LSM_ERR_INPUT, name,
                     "line %zu: %s is not greater than the previous height %s", line_no, cur, prev);
       break;

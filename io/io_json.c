@@ -41,15 +41,19 @@ void lsm_json_string(FILE *f, const char *s) {
 
 /* A JSON number: the shortest of 15 to 17 significant digits that reads back
  * as the same double (heights and lengths exactly as the run used them). */
+void lsm_shortest_number(char *text, size_t size, double v) {
+  for (int digits = 15; digits <= 17; ++digits) {
+    snprintf(text, size, "%.*g", digits, v);
+    if (strtod(text, NULL) == v) return;
+  }
+}
+
 void lsm_json_number(FILE *f, double v) {
   if (!isfinite(v)) {
     fputs("null", f);
     return;
   }
   char text[40];
-  for (int digits = 15; digits <= 17; ++digits) {
-    snprintf(text, sizeof text, "%.*g", digits, v);
-    if (strtod(text, NULL) == v) break;
-  }
+  lsm_shortest_number(text, sizeof text, v);
   fputs(text, f);
 }

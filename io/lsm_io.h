@@ -206,6 +206,9 @@ void lsm_json_string(FILE *f, const char *s);
  * back as v; null when v is not finite. */
 void lsm_json_number(FILE *f, double v);
 
+/* The shortest of %.15g, %.16g, %.17g that reads back as v ("50", "0.1"). */
+void lsm_shortest_number(char *text, size_t size, double v);
+
 /* Writes the JSON sidecar of a raw volume (sizes, spacing, origin, dtype,
  * endianness, data file name). */
 lsm_status lsm_raw_write_json(const char *path, const char *data_file,

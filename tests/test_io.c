@@ -254,6 +254,8 @@ static void test_heights_bad(void **state) {
       {"1\n1e999\n", "line 2:"},
       {"1\n3\n\n2\n", "line 4: 2 is not greater than the previous height 3"},
       {"# c\n0.5\n0.5\n", "line 3: 0.5 is not greater than the previous height 0.5"},
+      {"0\n75\n50\n", "line 3: 50 is not greater than the previous height 75"},
+      {"100\n120\n120\n", "line 3: 120 is not greater than the previous height 120"},
       {"1e-400\n1\n", "line 1: \"1e-400\" is out of range"},
       {"0\n-1e-400\n1\n", "line 2: \"-1e-400\" is out of range"},
       {"1\n2 3 # two values\n", "line 2: \"2 3\" is not a number"},
