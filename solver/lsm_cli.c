@@ -68,7 +68,10 @@ static const char reconstruct_help[] =
     "                         input height; input heights on that grid get their input\n"
     "                         slice back exactly\n"
     "  --per-iteration        the design document's mode: every solver iteration of\n"
-    "                         every pair is a slice, heights by linspace per pair\n"
+    "                         every pair is a slice, heights by linspace per pair;\n"
+    "                         linear profile (--interp and --ends do not apply); next\n"
+    "                         to an empty slice the shape shrinks until it vanishes\n"
+    "                         and its iterates fill the half gap beside the full slice\n"
     "  --no-slices            do not write slices/*.png\n"
     "  --format LIST          volume formats, comma separated (default nrrd):\n"
     "                         nrrd, mha (MetaImage), vtk (legacy VTK), exr (one\n"
@@ -102,7 +105,8 @@ static const char reconstruct_help_method[] =
     "  --tol T                per-iteration mode: stop a pair when\n"
     "                         CP = | ||phi^n - phi_T|| - ||phi^(n-1) - phi_T|| | <= T\n"
     "                         (default 0.25; the norm is over all cells, so CP grows\n"
-    "                         with the square root of the cell count: scale T with it)\n"
+    "                         with the square root of the cell count: scale T with it;\n"
+    "                         a pair next to an empty slice stops when the shape vanishes)\n"
     "  --max-iter N           most solver steps per morph (default 100000); a gap runs\n"
     "                         two, A -> B and B -> A (one with --per-iteration)\n"
     "  --interp linear|cubic  z-profile through the slices (default cubic): cubic adds to\n"
@@ -126,7 +130,9 @@ static const char reconstruct_help_method[] =
     "                         more once shifted, the shift of largest overlap nearer the\n"
     "                         centroid shift than none, and the two alike at that shift\n"
     "                         (README, method item 2); none: no alignment\n"
-    "\n"
+    "\n";
+
+static const char reconstruct_help_running[] =
     "Running:\n"
     "  --threads N            threads (default: all cores): gaps side by side for slices up\n"
     "                         to 1024^2 (any size with --backend opencl), as many as their\n"
@@ -213,6 +219,7 @@ void lsm_cli_help(FILE *f, const char *topic) {
   if (topic && strcmp(topic, "reconstruct") == 0) {
     fputs(reconstruct_help, f);
     fputs(reconstruct_help_method, f);
+    fputs(reconstruct_help_running, f);
     fputs(reconstruct_help_files, f);
   }
   else if (topic && strcmp(topic, "score") == 0)
@@ -451,10 +458,12 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       cli->device = (int)n;
     } else if (IS("--interp")) {
       NEEDS_VALUE();
+      cli->interp_given = 1;
       if ((so->interp = lsm_interp_from_name(v)) == LSM_INTERP_UNKNOWN)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--interp: '%s' is not one of linear, cubic", v);
     } else if (IS("--ends")) {
       NEEDS_VALUE();
+      cli->ends_given = 1;
       if ((so->ends = lsm_end_rule_from_name(v)) == LSM_ENDS_UNKNOWN)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--ends: '%s' is not one of auto, tip, halfway", v);
     } else if (IS("--align")) {

@@ -40,6 +40,7 @@ typedef struct lsm_cli {
   int mesh;                  /* --mesh: write surface.ply */
   int preview;               /* preview.png and preview3d.png (--no-preview: 0) */
   lsm_stack_opts stack;
+  int interp_given, ends_given; /* --interp / --ends on the command line */
   /* score */
   const char *truth_dir;
   const char *result_dir;

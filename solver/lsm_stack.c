@@ -75,6 +75,13 @@ void lsm_stack_opts_default(lsm_stack_opts *opts) {
   lsm_morph_opts_default(&opts->morph);
 }
 
+void lsm_stack_opts_resolve(lsm_stack_opts *opts) {
+  if (opts->per_iteration) {
+    opts->interp = LSM_INTERP_LINEAR;
+    opts->ends = LSM_ENDS_HALFWAY;
+  }
+}
+
 static double now_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -1579,6 +1586,9 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
     return lsm_fail(err, LSM_ERR_INPUT, NULL,
                     "output step %g is too small for distinct heights near %g", dz, z_mag);
   const size_t gaps = src->count - 1;
+  lsm_stack_opts used = *opts;
+  lsm_stack_opts_resolve(&used);
+  opts = &used;
 
   stack_run r;
   memset(&r, 0, sizeof r);

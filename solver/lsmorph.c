@@ -886,7 +886,13 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     if (cli->stack.per_iteration && cli->stack.dz > 0)
       fprintf(stderr, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
                       "iteration is a slice)\n");
+    if (cli->stack.per_iteration &&
+        ((cli->interp_given && cli->stack.interp != LSM_INTERP_LINEAR) ||
+         (cli->ends_given && cli->stack.ends != LSM_ENDS_HALFWAY)))
+      fprintf(stderr, "lsmorph: note: --per-iteration takes the linear profile and ends an "
+                      "object at mid-gap: --interp cubic and --ends tip|auto have no effect\n");
   }
+  lsm_stack_opts_resolve(&cli->stack); /* run.json records what the run uses */
   const int threads = setup_run(cli);
   lsm_backend *backend = NULL;
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);

@@ -260,6 +260,15 @@ check "--per-iteration exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "--per-iteration: run.json says \"evenly_spaced\": false" grep -q '"evenly_spaced": false' "$TMP/out-iter/run.json"
 check "--per-iteration: a note says the slices are not evenly spaced" grep -q "note: the output slices are not evenly spaced" "$TMP/e"
 check "outline pyramid: no note that it looks filled" sh -c "! grep -q 'looks filled' '$TMP/e'"
+check "--per-iteration: run.json records the linear profile it uses" grep -q '"interp": "linear", "ends": "halfway"' "$TMP/out-iter/run.json"
+check "--per-iteration without --interp: no note about it" sh -c "! grep -q 'no effect' '$TMP/e'"
+"$LSM" reconstruct "$SET" -o "$TMP/out-iter-cubic" --input outline --heights "$SET/heights.txt" \
+  --per-iteration --interp cubic --ends tip --no-preview >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--per-iteration --interp cubic exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "--per-iteration --interp cubic: a note says it has no effect" grep -q "note: --per-iteration takes the linear profile" "$TMP/e"
+check "--per-iteration --interp cubic: run.json says linear" grep -q '"interp": "linear", "ends": "halfway"' "$TMP/out-iter-cubic/run.json"
+check "--per-iteration --interp cubic: the same volume" cmp -s "$TMP/out-iter/volume.nrrd" "$TMP/out-iter-cubic/volume.nrrd"
 
 # --ends changes only gaps next to an empty slice: the pyramid has none.
 "$LSM" reconstruct "$SET" -o "$TMP/out-halfway" --input outline --heights "$SET/heights.txt" \
