@@ -5,6 +5,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <inttypes.h>
 #include <ftw.h>
 #if defined(__GLIBC__) || defined(__linux__)
 #include <malloc.h>
@@ -410,7 +411,21 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   lsm_json_number(f, o->pixel_size);
   fputs(", \"dz\": ", f);
   lsm_json_number(f, o->dz > 0 ? o->dz : o->pixel_size);
-  fprintf(f, ", \"invert\": %s, \"threads\": %d},\n", cli->invert ? "true" : "false", threads);
+  fprintf(f, ", \"invert\": %s, \"threads\": %d, \"values\": ", cli->invert ? "true" : "false",
+          threads);
+  lsm_json_string(f, lsm_values_name((lsm_values)cli->values));
+  fputs(", \"formats\": [", f);
+  int listed = 0;
+  for (unsigned bit = 1; bit <= LSM_FORMAT_ALL; bit <<= 1) {
+    if (!(cli->formats & bit)) continue;
+    if (listed++) fputs(", ", f);
+    lsm_json_string(f, lsm_format_name(bit));
+  }
+  const lsm_pls_opts *pls = &o->morph.pls;
+  fprintf(f, "], \"mesh\": %s, \"preview\": %s, \"particles_per_cell\": %d, \"pls_reseed\": %d, "
+          "\"pls_radius_adjust\": %s, \"seed\": %" PRIu64 "},\n",
+          cli->mesh ? "true" : "false", cli->preview ? "true" : "false", pls->particles_per_cell,
+          pls->reseed_every, pls->radius_adjust ? "true" : "false", pls->seed);
   fputs("  \"input\": {\"folder\": ", f);
   lsm_json_string(f, cli->slice_dir);
   fprintf(f, ", \"slices\": %zu, \"width\": %d, \"height\": %d, \"files\": [", src->count, width,
@@ -1081,7 +1096,12 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     char dir[4200], **result = NULL;
     size_t m = 0;
     snprintf(dir, sizeof dir, "%s/slices", cli->result_dir);
-    st = lsm_dir_list_png(dir, &result, &m, err);
+    struct stat info;
+    if (stat(dir, &info) != 0 && errno == ENOENT && stat(cli->result_dir, &info) == 0)
+      st = lsm_fail(err, LSM_ERR_INPUT, dir,
+                    "no such folder: score reads the result's slices (a reconstruct run with "
+                    "--no-slices has none)");
+    if (st == LSM_OK) st = lsm_dir_list_png(dir, &result, &m, err);
     lsm_path_list_free(result, m);
     if (st == LSM_OK && m != last_input + 1)
       st = lsm_fail(err, LSM_ERR_INPUT, dir,

@@ -260,6 +260,10 @@ check "--per-iteration exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "--per-iteration: run.json says \"evenly_spaced\": false" grep -q '"evenly_spaced": false' "$TMP/out-iter/run.json"
 check "--per-iteration: a note says the slices are not evenly spaced" grep -q "note: the output slices are not evenly spaced" "$TMP/e"
 check "outline pyramid: no note that it looks filled" sh -c "! grep -q 'looks filled' '$TMP/e'"
+for field in '"values": "sdf"' '"formats": ["nrrd"]' '"mesh": false' '"preview": false' \
+  '"particles_per_cell": 16' '"pls_reseed": 0' '"pls_radius_adjust": false' '"seed": '; do
+  check "run.json options record $field" grep -qF "$field" "$TMP/out-iter/run.json"
+done
 check "--per-iteration: run.json records the linear profile it uses" grep -q '"interp": "linear", "ends": "halfway"' "$TMP/out-iter/run.json"
 check "--per-iteration without --interp: no note about it" sh -c "! grep -q 'no effect' '$TMP/e'"
 "$LSM" reconstruct "$SET" -o "$TMP/out-iter-cubic" --input outline --heights "$SET/heights.txt" \
@@ -363,6 +367,7 @@ check "score --stride 2 -- -dash OUT reads -dash as the truth folder" grep -q --
   --seed 18446744073709551615 --no-preview -q >"$TMP/o" 2>"$TMP/e"
 rc=$?
 check "--seed 2^64 - 1 runs (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "run.json options record --seed 2^64 - 1 exactly" grep -qF '"seed": 18446744073709551615}' "$TMP/out-seed/run.json"
 # The rectangles shrink in natural order (1.png: 86x56, 2.png: 64x42, 10.png:
 # 48x30); byte order (1, 10, 2) would not.  With dz 1 the output slices at
 # z = 0, 4, 8 are those inputs exactly: count their inside cells (phi <= 0)
