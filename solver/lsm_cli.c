@@ -29,6 +29,7 @@ static const char general_help[] =
 
 static const char reconstruct_help[] =
     "Usage: lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
+    "       (-o is also --output)\n"
     "\n"
     "Reads the PNG files of SLICE_DIR in natural order (2.png before 10.png), one slice\n"
     "each, evolves each slice into the next with phi_t + (phi - phi_target)|grad phi| = 0,\n"
@@ -168,7 +169,7 @@ static const char reconstruct_help_files[] =
     "                         orange)\n"
     "  preview3d.png          a shaded rendering of the surface\n"
     "  heights.txt            the height of each output slice, one per line\n"
-    "  slices/00001.png ...   binary mask of each output slice (255 inside)\n"
+    "  slices/00001.png ...   binary mask of each output slice (255 inside: phi <= 0)\n"
     "  run.json               options, per-pair iterations, dt, CP, seconds, cells; totals\n"
     "\n"
     "Exit status: 0 success, 1 bad input or failure, 2 usage error, 130 / 143 / 129\n"

@@ -241,6 +241,7 @@ fi
 expect "score: no truth slices" 1 "empty: 0 PNG files: --stride 2 needs at least 3" - score empty ref --stride 2
 expect "score: nothing held out" 1 "good: 3 PNG files: --stride 3 needs at least 4" - score good ref --stride 3
 expect "score: missing result" 1 "nothing/slices: no such folder" - score good nothing --stride 2
+expect "score: a result without slices/ (--no-slices)" 1 "empty/slices: no such folder: score reads the result's slices (a reconstruct run with --no-slices has none)" - score good empty --stride 2
 expect "score: bad --stride" 2 "--stride: 1 is out of range" - score good ref --stride 1
 # a result scored with another stride than it was made with, or against another stack
 mkdir -p tall2 tall4 && cp tall/1.png tall/3.png tall/5.png tall/7.png tall/9.png tall2/ &&
