@@ -100,13 +100,10 @@ lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_sl
     if (bt[k]) all[m++] = sqrt(dr[k]);
   }
   for (size_t k = 0; dist && st == LSM_OK && k < m; ++k) st = append(dist, dn, dcap, all[k], err);
-  qsort(all, m, sizeof *all, cmp_double);
+  out->hd95 = m ? lsm_quantile(all, m, 0.95) : 0.0; /* sorts all */
   for (size_t k = 0; k < m; ++k) total += all[k];
   out->mean_surface = m ? total / (double)m : 0.0;
   out->hd_max = m ? all[m - 1] : 0.0;
-  /* 95th percentile by the nearest-rank method. */
-  size_t rank = m ? (size_t)ceil(0.95 * (double)m) : 0;
-  out->hd95 = m ? all[rank ? rank - 1 : 0] : 0.0;
 done:
   free(br);
   free(bt);
