@@ -45,6 +45,25 @@ need "$LSM"
 command -v oiiotool >/dev/null 2>&1 && command -v iinfo >/dev/null 2>&1 ||
   { bad "oiiotool / iinfo are missing (Debian package openimageio-tools)"; finish; }
 
+# mask_matches_slices DIR: a --values mask volume.raw holds DIR/slices/*.png byte
+# for byte (both 255 where phi <= 0).
+mask_matches_slices() {
+  check "--values mask: $(basename "$1")/volume.raw holds slices/*.png byte for byte" \
+    "$PY" -c 'import sys, glob, numpy as np, vtk
+from vtkmodules.util import numpy_support
+d = sys.argv[1]
+vol = np.fromfile(d + "/volume.raw", dtype=np.uint8)
+files = sorted(glob.glob(d + "/slices/*.png"))
+r = vtk.vtkPNGReader()
+planes = []
+for f in files:
+    r.SetFileName(f); r.Update()
+    img = r.GetOutput(); nx, ny, _ = img.GetDimensions()
+    a = numpy_support.vtk_to_numpy(img.GetPointData().GetScalars()).reshape(ny, nx)
+    planes.append(a[::-1])  # VTK reads the bottom row first
+sys.exit(0 if len(files) and vol.size == sum(p.size for p in planes) and np.array_equal(vol, np.concatenate([p.ravel() for p in planes])) else 1)' "$1"
+}
+
 make_tmp
 
 # ---- the ball, every 8th slice, every format, the mesh -------------------------------------
@@ -69,13 +88,17 @@ if [ $rc -eq 0 ]; then
 fi
 
 # ---- a mask volume with anisotropic physical spacing ---------------------------------------
-"$LSM" reconstruct "$TMP/ball" -o "$TMP/mask" --spacing 4 --pixel-size 0.5 --dz 1 --values mask \
-  --format raw,exr,vtk,mha,nrrd --no-slices -q >"$TMP/log" 2>&1
+# (heights from 5.5 on, so every format's z origin is checked against a value other than 0)
+n_ball=$(ls "$TMP/ball"/*.png | wc -l)
+awk -v n="$n_ball" 'BEGIN { for (k = 0; k < n; ++k) print 5.5 + 4 * k }' >"$TMP/heights55.txt"
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/mask" --heights "$TMP/heights55.txt" --pixel-size 0.5 --dz 1 \
+  --values mask --format raw,exr,vtk,mha,nrrd -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --values mask exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
+  check "heights from 5.5: heights.txt starts at 5.5" [ "$(head -n 1 "$TMP/mask/heights.txt")" = "5.5" ]
   run_checks "$TMP/check2" "$PY" "$HELPER" check "$TMP/mask" --spacing 0.5 0.5 1 --values mask
-  check "--no-slices: no slices/ folder" [ ! -e "$TMP/mask/slices" ]
+  mask_matches_slices "$TMP/mask"
 fi
 
 # ---- per-iteration mode: slice count and z spacing known only at the end ---------------------
@@ -103,6 +126,11 @@ rc=$?
 check "reconstruct --input outline --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
   run_checks "$TMP/check4" "$PY" "$HELPER" check "$TMP/olout" --spacing 1 1 1 --values sdf --mesh --caps
+  # outlines: phi is exactly 0 on the contour pixels, which are inside
+  "$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olmask" --input outline --spacing 8 --values mask \
+    --format raw --no-preview -q >"$TMP/log" 2>&1
+  check "outline --values mask exits 0 ($(head -c 300 "$TMP/log"))" [ $? -eq 0 ]
+  mask_matches_slices "$TMP/olmask"
 fi
 
 # ---- defaults: volume.nrrd and the previews only; --no-preview ------------------------------
@@ -111,6 +139,7 @@ check "default run exits 0" [ $? -eq 0 ]
 check "default run writes volume.nrrd" [ -f "$TMP/def/volume.nrrd" ]
 check "default run writes no other volume" sh -c '[ ! -e "$1/volume.mha" ] && [ ! -e "$1/volume.vtk" ] && [ ! -e "$1/volume.raw" ] && [ ! -e "$1/exr" ]' _ "$TMP/def"
 check "default run writes no mesh" [ ! -e "$TMP/def/surface.ply" ]
+check "--no-slices: no slices/ folder" [ ! -e "$TMP/def/slices" ]
 check "default run writes preview.png and preview3d.png" sh -c '[ -f "$1/preview.png" ] && [ -f "$1/preview3d.png" ]' _ "$TMP/def"
 "$LSM" reconstruct "$TMP/ball" -o "$TMP/nop" --spacing 8 --no-slices --no-preview -q >/dev/null 2>&1
 check "--no-preview run exits 0" [ $? -eq 0 ]
