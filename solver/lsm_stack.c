@@ -11,6 +11,7 @@
 #include "kernels/lsm_cell.h"
 #include "lsm_ends.h"
 #include "lsm_parts.h"
+#include "lsm_pchip.h"
 #include "lsm_register.h"
 #include "lsm_sdf.h"
 
@@ -163,35 +164,6 @@ static lsm_status slice_phi(const slice *s, lsm_input_kind input, int ox, int oy
 
 /* ---- monotone cubic (PCHIP) ------------------------------------------------------------- */
 
-/* Both strictly positive or both strictly negative (signs compared, not
- * multiplied, so no product can under- or overflow). */
-static inline int same_sign(double a, double b) {
-  return (a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0);
-}
-
-/* Fritsch–Carlson slope at a knot between intervals of lengths h0, h1 with
- * secants d0, d1 (the weighted harmonic mean of Fritsch & Butland, as in
- * Moler's pchip): zero at a local extremum, so the Hermite cubic stays within
- * the range of its two knots — no overshoot.  At most 3 min(|d0|, |d1|).
- * Homogeneous: scaling h0, h1 by c scales the slope by 1/c, so callers pass
- * lengths in units of the gap (its slope times H, the size of phi itself),
- * and nothing depends on the ratio of pixel size to slice spacing. */
-static inline double pchip_slope(double h0, double h1, double d0, double d1) {
-  if (!same_sign(d0, d1)) return 0.0;
-  const double hs = h0 + h1, w1 = (2.0 * h1 + h0) / hs, w2 = (h1 + 2.0 * h0) / hs;
-  return (w1 + w2) / (w1 / d0 + w2 / d1);
-}
-
-/* PCHIP slope at the end of the data (scipy's non-centred three-point
- * formula, shape preserving): h0, d0 the last interval and its secant, h1, d1
- * the one before it.  At most 3 |d0|; homogeneous as pchip_slope. */
-static inline double pchip_edge_slope(double h0, double h1, double d0, double d1) {
-  const double hs = h0 + h1, m = ((2.0 * h0 + h1) / hs) * d0 - (h0 / hs) * d1;
-  if (!same_sign(m, d0)) return 0.0;
-  if (same_sign(d0, -d1) && fabs(m) > 3.0 * fabs(d0)) return 3.0 * d0;
-  return m;
-}
-
 /* Cubic Hermite basis on s in [0, 1]. */
 static void hermite_basis(double s, double *h00, double *h10, double *h01, double *h11) {
   const double s2 = s * s, s3 = s2 * s;
@@ -342,13 +314,13 @@ static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_in
   if (interp == LSM_INTERP_CUBIC && align == LSM_ALIGN_HULL && !a->empty && !b->empty) {
     if (window_usable(w, 0)) {
       const double h0 = w->z[1] - w->z[0];
-      f->mx[0] = pchip_slope(h0, f->H, (f->dx[1] - f->dx[0]) / h0, sx);
-      f->my[0] = pchip_slope(h0, f->H, (f->dy[1] - f->dy[0]) / h0, sy);
+      f->mx[0] = lsm_pchip_slope(h0, f->H, (f->dx[1] - f->dx[0]) / h0, sx);
+      f->my[0] = lsm_pchip_slope(h0, f->H, (f->dy[1] - f->dy[0]) / h0, sy);
     }
     if (window_usable(w, 3)) {
       const double h1 = w->z[3] - w->z[2];
-      f->mx[1] = pchip_slope(f->H, h1, sx, (f->dx[3] - f->dx[2]) / h1);
-      f->my[1] = pchip_slope(f->H, h1, sy, (f->dy[3] - f->dy[2]) / h1);
+      f->mx[1] = lsm_pchip_slope(f->H, h1, sx, (f->dx[3] - f->dx[2]) / h1);
+      f->my[1] = lsm_pchip_slope(f->H, h1, sy, (f->dy[3] - f->dy[2]) / h1);
     }
   }
   int mx = 0, my = 0;
@@ -613,10 +585,10 @@ static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2],
         if (end[side]) /* as the end gap continues it: only shrinking toward the end */
           slope = side ? fmax(d, 0.0) : fmin(d, 0.0);
         else if (outer[side])
-          slope = side ? pchip_slope(1.0, h_outer[1], d, LSM_AT(outer[1], i, j) / h_outer[1])
-                       : pchip_slope(h_outer[0], 1.0, LSM_AT(outer[0], i, j) / h_outer[0], d);
+          slope = side ? lsm_pchip_slope(1.0, h_outer[1], d, LSM_AT(outer[1], i, j) / h_outer[1])
+                       : lsm_pchip_slope(h_outer[0], 1.0, LSM_AT(outer[0], i, j) / h_outer[0], d);
         else if (outer[other] || end[other])
-          slope = pchip_edge_slope(1.0, h_outer[other], d,
+          slope = lsm_pchip_edge_slope(1.0, h_outer[other], d,
                                    outer[other] ? LSM_AT(outer[other], i, j) / h_outer[other]
                                                 : end_secant[other]);
         else
