@@ -485,28 +485,91 @@ static void test_first_slice_slope(void **state) {
  * gap continues with: 0 where the section grows toward the end.  Radii 20 at
  * z = 8 and 16 at z = 16 (the widest part between them, the object ending
  * below z = 8): the section just past z = 8 keeps its area (the secant would
- * shrink it straight toward z = 16, about 5 % of the area by z = 9). */
+ * shrink it straight toward z = 16, about 5 % of the area by z = 9).  The
+ * same stack upside down (the empty slice above) gives the same areas at
+ * every distance from F: the rule is symmetric in z. */
 static void test_end_neighbour_flat(void **state) {
   (void)state;
   const double z[3] = {0.0, 8.0, 16.0}, radius[3] = {0.0, 20.0, 16.0};
-  disc_source src = {96, radius, NULL};
-  for (int method = 0; method < 2; ++method) {
+  const double mirrored[3] = {16.0, 20.0, 0.0}; /* the same with the empty slice above */
+  size_t areas[2][2][9]; /* [up][method][units from F]: the rule is symmetric in z */
+  for (int up = 0; up < 2; ++up) {
+    disc_source src = {96, up ? mirrored : radius, NULL};
+    /* heights from the full section toward the narrower one */
+    const double zf = 8.0, z1 = up ? 7.0 : 9.0, z4 = up ? 4.0 : 12.0, zn = up ? 0.0 : 16.0;
+    for (int method = 0; method < 2; ++method) {
+      lsm_stack_opts o;
+      lsm_stack_opts_default(&o);
+      o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+      o.dz = 1.0;
+      record rec = {0};
+      run_stack(&src, z, 3, &o, &rec);
+      const size_t a8 = slice_inside(&rec, slice_at(&rec, zf), NULL);
+      const size_t a9 = slice_inside(&rec, slice_at(&rec, z1), NULL);
+      const size_t a12 = slice_inside(&rec, slice_at(&rec, z4), NULL);
+      const size_t a16 = slice_inside(&rec, slice_at(&rec, zn), NULL);
+      print_message("%s, empty slice %s: area at 0, 1, 4, 8 units from F: %zu %zu %zu %zu\n",
+                    method ? "blend" : "ls", up ? "above" : "below", a8, a9, a12, a16);
+      assert_true((double)a9 >= 0.98 * (double)a8);
+      assert_true(a9 <= a8 && a12 < a9 && a16 < a12); /* and no overshoot */
+      for (int t = 0; t <= 8; ++t)
+        areas[up][method][t] = slice_inside(&rec, slice_at(&rec, up ? 8.0 - t : 8.0 + t), NULL);
+      record_free(&rec);
+    }
+  }
+  for (int method = 0; method < 2; ++method)
+    for (int t = 0; t <= 8; ++t)
+      if (areas[0][method][t] != areas[1][method][t])
+        fail_msg("%s, %d units from F: area %zu with the empty slice below, %zu above",
+                 method ? "blend" : "ls", t, areas[0][method][t], areas[1][method][t]);
+}
+
+/* The cubic profile's morph weight, on a lone gap (two slices: the spline is
+ * the straight line, so only the weight is left): at fraction s the cubic
+ * slice is lin + omega(s) (morph - lin), lin the blend of the two slices, morph
+ * the linear profile's slice, omega(s) = 16 s^2 (1 - s)^2 (1 at mid-gap, 0
+ * with zero slope at the slices).  Two discs of different size and centre, so
+ * the morph departs from the blend. */
+static void test_morph_weight(void **state) {
+  (void)state;
+  const double z[2] = {0.0, 8.0}, radius[2] = {20.0, 13.0}, cx[2] = {42.0, 52.0};
+  disc_source src = {96, radius, cx};
+  record rec[2] = {{0}, {0}};
+  for (int cubic = 0; cubic < 2; ++cubic) {
     lsm_stack_opts o;
     lsm_stack_opts_default(&o);
-    o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+    o.interp = cubic ? LSM_INTERP_CUBIC : LSM_INTERP_LINEAR;
+    o.align = LSM_ALIGN_NONE;
     o.dz = 1.0;
-    record rec = {0};
-    run_stack(&src, z, 3, &o, &rec);
-    const size_t a8 = slice_inside(&rec, slice_at(&rec, 8.0), NULL);
-    const size_t a9 = slice_inside(&rec, slice_at(&rec, 9.0), NULL);
-    const size_t a12 = slice_inside(&rec, slice_at(&rec, 12.0), NULL);
-    const size_t a16 = slice_inside(&rec, slice_at(&rec, 16.0), NULL);
-    print_message("%s: area at z = 8, 9, 12, 16: %zu %zu %zu %zu\n", method ? "blend" : "ls", a8,
-                  a9, a12, a16);
-    assert_true((double)a9 >= 0.98 * (double)a8);
-    assert_true(a9 <= a8 && a12 < a9 && a16 < a12); /* and no overshoot */
-    record_free(&rec);
+    run_stack(&src, z, 2, &o, &rec[cubic]);
   }
+  const size_t cells = (size_t)rec[0].w * rec[0].h;
+  float *pa = malloc(cells * sizeof(float)), *pb = malloc(cells * sizeof(float));
+  assert_non_null(pa);
+  assert_non_null(pb);
+  input_phi(&src, 0, pa);
+  input_phi(&src, 1, pb);
+  assert_int_equal(rec[0].count, 9);
+  assert_int_equal(rec[1].count, 9);
+  double departure = 0.0;
+  for (size_t q = 1; q < 8; ++q) {
+    const double s = rec[0].z[q] / 8.0, omega = 16.0 * s * s * (1.0 - s) * (1.0 - s);
+    const float *lin_out = rec[0].phi + q * cells, *cub_out = rec[1].phi + q * cells;
+    for (size_t c = 0; c < cells; ++c) {
+      const double lin = (1.0 - s) * pa[c] + s * pb[c];
+      const double want = lin + omega * (lin_out[c] - lin);
+      if (fabs(cub_out[c] - want) > 1e-4 * (1.0 + fabs(want)))
+        fail_msg("z = %g cell %zu: cubic %g, want %g (lin %g, morph %g, omega %g)", rec[0].z[q], c,
+                 cub_out[c], want, lin, lin_out[c], omega);
+      if (q == 4) departure = fmax(departure, fabs(lin_out[c] - lin));
+    }
+  }
+  print_message("morph departs from the blend by up to %.3f at mid-gap\n", departure);
+  assert_true(departure > 0.5); /* the weight is visible */
+  free(pa);
+  free(pb);
+  record_free(&rec[0]);
+  record_free(&rec[1]);
 }
 
 /* Where the object ends (default options, cubic): an empty slice at z = 0,
@@ -684,6 +747,7 @@ int main(void) {
       cmocka_unit_test(test_object_ends_halfway),
       cmocka_unit_test(test_first_slice_slope),
       cmocka_unit_test(test_end_neighbour_flat),
+      cmocka_unit_test(test_morph_weight),
   };
   return cmocka_run_group_tests_name("interp", tests, NULL, NULL);
 }
