@@ -572,6 +572,47 @@ static void test_morph_weight(void **state) {
   record_free(&rec[1]);
 }
 
+/* Aligned pairs (--align hull) move their slices back along a monotone cubic
+ * through the centroids.  A disc accelerating along x (centroids 30, 40, 60,
+ * 90 px at z = 0, 8, 16, 24): in the gap 8 -> 16 the PCHIP slopes are 5/3
+ * px per unit z at z = 8 (secants 1.25 and 2.5) and 3 at z = 16 (2.5 and
+ * 3.75), so the centroid at fraction s is the Hermite cubic of 40, 60 with
+ * those slopes.  The straight line, or the two slopes swapped, are 1 to 1.6
+ * px off inside the gap. */
+static void test_aligned_path(void **state) {
+  (void)state;
+  const double z[4] = {0.0, 8.0, 16.0, 24.0}, radius[4] = {12.0, 12.0, 12.0, 12.0};
+  const double cx[4] = {30.0, 40.0, 60.0, 90.0};
+  disc_source src = {128, radius, cx};
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  o.align = LSM_ALIGN_HULL;
+  o.dz = 1.0;
+  record rec = {0};
+  run_stack(&src, z, 4, &o, &rec);
+  const double H = 8.0, m0 = 2.0 / (1.0 / 1.25 + 1.0 / 2.5), m1 = 2.0 / (1.0 / 2.5 + 1.0 / 3.75);
+  double worst = 0.0;
+  for (int zq = 9; zq < 16; ++zq) {
+    const double s = (zq - 8.0) / H;
+    const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s;
+    const double h01 = -2 * s * s * s + 3 * s * s, h11 = s * s * s - s * s;
+    const double want = h00 * 40.0 + h10 * H * m0 + h01 * 60.0 + h11 * H * m1;
+    /* the disc's centre on row 63: midway between the zero crossings of phi */
+    const float *row = rec.phi + slice_at(&rec, zq) * (size_t)rec.w * rec.h + (size_t)63 * rec.w;
+    double cross[2];
+    int found = 0;
+    for (int x = 0; x + 1 < rec.w && found < 2; ++x)
+      if ((row[x] > 0.0f) != (row[x + 1] > 0.0f))
+        cross[found++] = x + (double)row[x] / ((double)row[x] - (double)row[x + 1]);
+    assert_int_equal(found, 2);
+    const double got = 0.5 * (cross[0] + cross[1]);
+    print_message("z = %d: disc centre x %.3f, cubic path %.3f\n", zq, got, want);
+    worst = fmax(worst, fabs(got - want));
+  }
+  assert_true(worst < 0.05);
+  record_free(&rec);
+}
+
 /* Where the object ends (default options, cubic): an empty slice at z = 0,
  * the last non-empty one F at z = 8, the slice N beyond it at z = 16 and,
  * where a third section is given, M at z = 24.
@@ -748,6 +789,7 @@ int main(void) {
       cmocka_unit_test(test_first_slice_slope),
       cmocka_unit_test(test_end_neighbour_flat),
       cmocka_unit_test(test_morph_weight),
+      cmocka_unit_test(test_aligned_path),
   };
   return cmocka_run_group_tests_name("interp", tests, NULL, NULL);
 }
