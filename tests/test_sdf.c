@@ -230,6 +230,72 @@ static void test_sdf_half_plane(void **state) {
   check_half_plane(0.5f);
 }
 
+/* Anisotropic pixels, dx = 1, dy = 2.  Every value by hand from
+ * lsm_sdf_from_mask's rule: outside, phi = d - half with d the distance to the
+ * nearest inside pixel centre; inside, phi = -(d - half) with d the distance
+ * to the nearest outside pixel centre; half = min(dx, dy) / 2 = 0.5 ("the
+ * smaller half-size" of the pixel, lsm_sdf.c).  At dx = dy every test above
+ * has min = max; here half = max(dx, dy) / 2 would put 1 in place of 0.5. */
+static void test_sdf_anisotropic(void **state) {
+  (void)state;
+  const int W = 12, H = 8;
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_grid *phi = new_grid(W, H, 1.0f, 2.0f);
+  /* vertical boundary: columns 0..5 inside.  Across it d = dx |i - i'|:
+   * column 5 is -(1 - 0.5) = -0.5, column 6 +0.5, column i: (i - 5) - 0.5
+   * outside, -((6 - i) - 0.5) inside. */
+  lsm_mask m = new_mask(W, H);
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < 6; ++i) set_px(&m, i, j);
+  assert_int_equal(lsm_sdf_from_mask(&m, phi, &err), LSM_OK);
+  for (int j = 0; j < H; ++j) {
+    assert_close(LSM_AT(phi, 5, j), -0.5, 1e-6);
+    assert_close(LSM_AT(phi, 6, j), 0.5, 1e-6);
+    for (int i = 0; i < W; ++i)
+      assert_close(LSM_AT(phi, i, j), i >= 6 ? (i - 5) - 0.5 : -((6 - i) - 0.5), 1e-6);
+  }
+  lsm_mask_free(&m);
+  /* horizontal boundary: rows 0..3 inside.  Across it d = dy |j - j'| = 2, 4,
+   * ...: row 3 is -(2 - 0.5) = -1.5, row 4 +1.5 (the zero level still midway
+   * between them, at the boundary); row j: 2 (j - 3) - 0.5 outside,
+   * -(2 (4 - j) - 0.5) inside. */
+  m = new_mask(W, H);
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < W; ++i) set_px(&m, i, j);
+  assert_int_equal(lsm_sdf_from_mask(&m, phi, &err), LSM_OK);
+  for (int i = 0; i < W; ++i) {
+    assert_close(LSM_AT(phi, i, 3), -1.5, 1e-6);
+    assert_close(LSM_AT(phi, i, 4), 1.5, 1e-6);
+    for (int j = 0; j < H; ++j)
+      assert_close(LSM_AT(phi, i, j), j >= 4 ? 2.0 * (j - 3) - 0.5 : -(2.0 * (4 - j) - 0.5), 1e-6);
+  }
+  lsm_mask_free(&m);
+  /* a corner: inside columns 0..5 and rows 0..3.  Outside cells: distance to
+   * the inside corner pixel (5, 3) where both offsets are positive, else to
+   * the nearest inside row or column; inside cells: the nearer of the two
+   * boundaries, min(dx (6 - i), dy (4 - j)). */
+  m = new_mask(W, H);
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 6; ++i) set_px(&m, i, j);
+  assert_int_equal(lsm_sdf_from_mask(&m, phi, &err), LSM_OK);
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < W; ++i) {
+      double want;
+      if (i < 6 && j < 4) {
+        want = -(fmin(6.0 - i, 2.0 * (4 - j)) - 0.5);
+      } else {
+        const double ox = i >= 6 ? i - 5.0 : 0.0, oy = j >= 4 ? 2.0 * (j - 3) : 0.0;
+        want = hypot(ox, oy) - 0.5;
+      }
+      assert_close(LSM_AT(phi, i, j), want, 1e-5);
+    }
+  /* the diagonal neighbour: sqrt(1 + 4) - 0.5 */
+  assert_close(LSM_AT(phi, 6, 4), sqrt(5.0) - 0.5, 1e-6);
+  lsm_mask_free(&m);
+  lsm_grid_destroy(&phi);
+}
+
 static void test_sdf_disc(void **state) {
   (void)state;
   const int N = 65, c = 32, R = 20;
@@ -678,6 +744,7 @@ int main(void) {
       cmocka_unit_test(test_edt_bad_arguments),
       cmocka_unit_test(test_sdf_half_plane),
       cmocka_unit_test(test_sdf_disc),
+      cmocka_unit_test(test_sdf_anisotropic),
       cmocka_unit_test(test_sdf_empty_full_and_errors),
       cmocka_unit_test(test_fill_small_exact),
       cmocka_unit_test(test_fill_disc),
