@@ -42,6 +42,7 @@ void lsm_json_string(FILE *f, const char *s) {
 /* A JSON number: the shortest of 15 to 17 significant digits that reads back
  * as the same double (heights and lengths exactly as the run used them). */
 void lsm_shortest_number(char *text, size_t size, double v) {
+  if (!text || size == 0) return;
   for (int digits = 15; digits <= 17; ++digits) {
     snprintf(text, size, "%.*g", digits, v);
     if (strtod(text, NULL) == v) return;
