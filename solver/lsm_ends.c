@@ -171,12 +171,23 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
   return LSM_OK;
 }
 
+/* The cells of sorted (ascending, count of them) that stay inside when the
+ * field is raised past sorted[cut] (erode_parts): those at least `tie`
+ * deeper; all of them when cut == count. */
+static size_t cells_kept(const float *sorted, size_t count, size_t cut, float tie) {
+  if (cut >= count) return count;
+  size_t kept = cut;
+  while (kept > 0 && sorted[kept - 1] > sorted[cut] - tie) --kept;
+  return kept;
+}
+
 /* Moves work around each part c (the cells of its region) uniformly so that
  * the part keeps between least[c] and target[c] of its cells inside.  Too
  * many: raised (an erosion, exact for a signed distance) past the value of
  * the (target+1)-th deepest (cells tied with it leave too, unless that
- * would leave fewer than least[c]: then they stay; a target below 1 empties
- * the part).  Too few (the per-cell trend took more): lowered until
+ * would leave fewer than least[c], or fewer than half the target with the
+ * tie nearer to it: then they stay; a target below 1 empties the part).
+ * Too few (the per-cell trend took more): lowered until
  * the least[c] deepest of F's cells are inside, but never below F itself
  * (full), so nothing grows past F.  scratch holds nx * ny floats, raise
  * count doubles. */
@@ -202,11 +213,26 @@ static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e
     size_t need = least[c] < 1.0 ? 0 : (size_t)floor(least[c] + 1e-6);
     if (need > cells) need = cells;
     raise[c] = 0.0;
+    const float tie = 1e-4f * work->dx; /* values this close leave together */
     if (count > keep) {
       qsort(scratch, count, sizeof *scratch, compare_float);
-      /* cells tied with the cut leave with it, unless the least count is
-       * among them: then the cut moves past the tie */
+      /* cells tied with the cut (the signed distance of a pixel mask has
+       * many equal values: a straight edge's row all half a pixel deep)
+       * leave together; but where that would keep less than half the
+       * target, they stay when that comes nearer it (a section of 7 cells
+       * eroded to 6.6 keeps 7, not the one cell deeper than its six tied
+       * ones: small sections would vanish at the first step).  A target
+       * below 1 still empties the part. */
       size_t cut = keep;
+      if (keep > 0) {
+        size_t past = keep;
+        while (past < count && scratch[past] < scratch[keep] + tie) ++past;
+        const double fewer = (double)cells_kept(scratch, count, keep, tie);
+        const double more = (double)cells_kept(scratch, count, past, tie);
+        if (fewer < 0.5 * target[c] && more - target[c] < target[c] - fewer) cut = past;
+      }
+      /* and where the least count is among them, the cut moves past the
+       * tie */
       while (need > 0 && cut < count && scratch[cut] <= scratch[need - 1]) ++cut;
       if (cut == 0)
         raise[c] = 1e-3 * work->dx - scratch[0];

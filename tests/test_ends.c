@@ -323,6 +323,31 @@ static void test_halfway_end(void **state) {
   lsm_grid_destroy(&phi_n);
 }
 
+/* A small section does not vanish by rounding: the signed distance of a
+ * 5-cell plus has its four arms tied, so a uniform erosion keeps 5 cells or
+ * 1.  Narrowing from a 3 x 3 square N, its target falls from 5 cells by
+ * about half a cell per eighth of the gap; the arms stay while the target
+ * is nearer 5 than 1 (the floor, 1 cell, would be less than half of it),
+ * and the end closes to its centre when the target nears 1. */
+static void test_small_section(void **state) {
+  (void)state;
+  const disc f = {47.0, 47.0, 1.0}, n = {47.0, 47.0, 1.5};
+  lsm_grid *phi_f = discs_phi(&f, 1), *phi_n = discs_phi(&n, 1);
+  assert_true(area(phi_f) == 5.0);
+  assert_true(area(phi_n) == 9.0);
+  const double h = 8.0, H = 8.0;
+  for (double sigma = 0.125; sigma <= 0.5; sigma += 0.125) {
+    const double a = end_area(phi_f, phi_n, h, H, LSM_END_TREND, sigma);
+    const double line = 5.0 - sigma * H * (9.0 - 5.0) / h;
+    const double target = fmin(line, two_section_parabola(9.0, 5.0, h, H, sigma * H));
+    print_message("sigma %.3f: %.0f cells, target %.2f\n", sigma, a, target);
+    assert_true(a == (5.0 - target < target - 1.0 ? 5.0 : 1.0));
+  }
+  assert_true(end_area(phi_f, phi_n, h, H, LSM_END_TREND, 0.125) == 5.0);
+  lsm_grid_destroy(&phi_f);
+  lsm_grid_destroy(&phi_n);
+}
+
 /* Each part ends on its own: of two discs of F, the one inside N's wide disc
  * narrows with it; the one outside N grows out toward the end (a tail) and
  * is a flat end, whole up to mid-gap. */
@@ -417,6 +442,7 @@ int main(void) {
       cmocka_unit_test(test_two_section_end),
       cmocka_unit_test(test_half_nested_end),
       cmocka_unit_test(test_tip_floor),
+      cmocka_unit_test(test_small_section),
       cmocka_unit_test(test_halfway_end),
       cmocka_unit_test(test_flat_end_with_m),
       cmocka_unit_test(test_parts_end_apart),
