@@ -638,6 +638,40 @@ static void test_thin_outside(void **state) {
  * small a hole is numerical diffusion; the union of the two insides left 2
  * of the 4 cells at z = 1 and 5.  At a pinhole's cells the profile is the
  * monotone cubic of the signed distances, which follows the hole. */
+/* The image border is not the object's boundary: a band across the whole
+ * image, 11 rows thick and then 21, is the same in every column of every
+ * output slice, its two border columns included (a margin of background
+ * around the image made them lag: 11 -> 13 rows where the band was 17 rows
+ * thick inside).  For ls and blend. */
+static void test_border_band(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {rect(0, 45, W - 1, 55, 0)}}, {1, {rect(0, 40, W - 1, 60, 0)}}};
+  const double z[2] = {0, 8};
+  for (int method = 0; method < 2; ++method) {
+    lsm_stack_opts o;
+    default_opts(&o);
+    o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+    run r;
+    assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 9);
+    for (size_t k = 0; k < r.sink.n; ++k) {
+      const float *phi = r.sink.s[k].phi;
+      int rows = 0;
+      for (int y = 0; y < H; ++y) {
+        const float middle = phi[y * W + W / 2];
+        rows += middle <= 0.0f;
+        for (int x = 0; x < W; ++x)
+          if (fabsf(phi[y * W + x] - middle) > 1e-5f)
+            fail_msg("%s slice %zu: phi(%d, %d) = %g, %g in the middle column",
+                     method ? "blend" : "ls", k, x, y, phi[y * W + x], middle);
+      }
+      print_message("%s z = %g: %d rows\n", method ? "blend" : "ls", r.sink.s[k].z, rows);
+      assert_true(rows >= 11 && rows <= 21);
+    }
+    sink_free(&r.sink);
+  }
+}
+
 static void test_pinhole(void **state) {
   (void)state;
   const double z[4] = {0.0, 2.0, 4.0, 6.0};
@@ -1231,6 +1265,7 @@ int main(void) {
       cmocka_unit_test(test_merge_split),
       cmocka_unit_test(test_thin_outside),
       cmocka_unit_test(test_pinhole),
+      cmocka_unit_test(test_border_band),
       cmocka_unit_test(test_scale_invariance),
       cmocka_unit_test(test_end_moves_on),
       cmocka_unit_test(test_branch_recedes),
