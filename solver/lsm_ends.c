@@ -213,9 +213,9 @@ static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e
     size_t need = least[c] < 1.0 ? 0 : (size_t)floor(least[c] + 1e-6);
     if (need > cells) need = cells;
     raise[c] = 0.0;
-    const float tie = 1e-4f * work->dx; /* values this close leave together */
     if (count > keep) {
       qsort(scratch, count, sizeof *scratch, compare_float);
+      const float tie = 1e-4f * work->dx; /* values this close leave together */
       /* cells tied with the cut (the signed distance of a pixel mask has
        * many equal values: a straight edge's row all half a pixel deep)
        * leave together; but where that would keep less than half the
