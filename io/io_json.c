@@ -39,8 +39,6 @@ void lsm_json_string(FILE *f, const char *s) {
   fputc('"', f);
 }
 
-/* A JSON number: the shortest of 15 to 17 significant digits that reads back
- * as the same double (heights and lengths exactly as the run used them). */
 void lsm_shortest_number(char *text, size_t size, double v) {
   if (!text || size == 0) return;
   for (int digits = 15; digits <= 17; ++digits) {
@@ -49,6 +47,8 @@ void lsm_shortest_number(char *text, size_t size, double v) {
   }
 }
 
+/* A JSON number: the shortest of 15 to 17 significant digits that reads back
+ * as the same double (heights and lengths exactly as the run used them). */
 void lsm_json_number(FILE *f, double v) {
   if (!isfinite(v)) {
     fputs("null", f);

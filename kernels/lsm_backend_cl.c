@@ -685,7 +685,6 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
 
 /* ---- per-pair state ------------------------------------------------------------------------- */
 
-
 /* The counters of lsm_pcl_detect / lsm_pcl_apply (morph.cl), in this order. */
 enum { PCL_N_ESCAPED, PCL_N_STRAY, PCL_N_REMOVED, PCL_N_LIVE, PCL_N_CORRECTED, PCL_N_COUNT };
 

@@ -609,8 +609,8 @@ static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2],
                        : lsm_pchip_slope(h_outer[0], 1.0, LSM_AT(outer[0], i, j) / h_outer[0], d);
         else if (outer[other] || end[other])
           slope = lsm_pchip_edge_slope(1.0, h_outer[other], d,
-                                   outer[other] ? LSM_AT(outer[other], i, j) / h_outer[other]
-                                                : end_secant[other]);
+                                       outer[other] ? LSM_AT(outer[other], i, j) / h_outer[other]
+                                                    : end_secant[other]);
         else
           slope = d;
         LSM_AT(m, i, j) = (float)slope; /* at most 3 |d| */

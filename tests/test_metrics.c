@@ -76,6 +76,18 @@ static size_t overlap(const lsm_mask *a, const lsm_mask *b) {
   return n;
 }
 
+/* Scores result against truth (the call must succeed); *dist gets the
+ * boundary distances (the caller frees it).  Returns their count. */
+static size_t score(const lsm_mask *result, const lsm_mask *truth, lsm_slice_score *s,
+                    double **dist) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  *dist = NULL;
+  size_t dn = 0, dcap = 0;
+  assert_int_equal(lsm_score_slice(result, truth, s, dist, &dn, &dcap, &err), LSM_OK);
+  return dn;
+}
+
 static void test_matches_definitions(void **state) {
   (void)state;
   uint64_t seed = 0x9e3779b97f4a7c15u;
@@ -90,11 +102,8 @@ static void test_matches_definitions(void **state) {
       continue; /* one side empty: the next test */
     }
     lsm_slice_score s;
-    lsm_err err;
-    lsm_err_clear(&err);
-    double *dist = NULL;
-    size_t dn = 0, dcap = 0;
-    assert_int_equal(lsm_score_slice(&a, &b, &s, &dist, &dn, &dcap, &err), LSM_OK);
+    double *dist;
+    const size_t dn = score(&a, &b, &s, &dist);
     size_t n = 0;
     double *ref = brute_distances(&a, &b, &n);
     assert_int_equal(s.comparable, 1);
@@ -131,11 +140,8 @@ static void test_known_rings(void **state) {
       if (y >= 5 && y <= 14 && x >= 5 && x <= 14) a.pixels[(size_t)y * 30 + x] = 1;
     }
   lsm_slice_score s;
-  lsm_err err;
-  lsm_err_clear(&err);
-  double *dist = NULL;
-  size_t dn = 0, dcap = 0;
-  assert_int_equal(lsm_score_slice(&a, &b, &s, &dist, &dn, &dcap, &err), LSM_OK);
+  double *dist;
+  const size_t dn = score(&a, &b, &s, &dist);
   assert_int_equal(dn, 80);
   assert_close(s.dice, 200.0 / 244.0, 1e-12);
   assert_close(s.hd_max, sqrt(2.0), 1e-12);
@@ -159,10 +165,8 @@ static void test_one_side_empty(void **state) {
   lsm_err_clear(&err);
   for (int side = 0; side < 2; ++side) {
     lsm_slice_score s;
-    double *dist = NULL;
-    size_t dn = 0, dcap = 0;
-    assert_int_equal(lsm_score_slice(side ? &b : &a, side ? &a : &b, &s, &dist, &dn, &dcap, &err),
-                     LSM_OK);
+    double *dist;
+    const size_t dn = score(side ? &b : &a, side ? &a : &b, &s, &dist);
     assert_int_equal(s.comparable, 0);
     assert_close(s.dice, 0.0, 0.0);
     assert_true(isinf(s.hd95));
