@@ -14,10 +14,13 @@
  * were doing.
  *   - Shape: per cell, phi_F + sigma H max(m, 0), m = (phi_F - phi_N) / h_N the
  *     z-slope of phi from the slice N beyond F (in that pair's frame, which
- *     also keeps moving: the stack driver's frame).  This is the slope the
- *     spline on the other side of F ends with, so the surface is C1 across F
- *     wherever the shape shrinks toward its end; where it grows toward the end
- *     it is held at F (nothing grows past the last slice).  The trend is
+ *     also keeps moving: the stack driver's frame), the gap N -> F's secant.
+ *     The spline on the other side of F leaves it with the three-point slope
+ *     through F, N and M instead (lsm_stack's gap_slopes), steeper where the
+ *     profile is curved, so the surface has a crease at F there: continuing
+ *     the end with that slope too closed ends faster than the real sets want
+ *     (validation/measurements/organs.md, session 29).  Where the shape grows
+ *     toward the end it is held at F (nothing grows past the last slice).  The trend is
  *     carried at most h_N past F (no farther than it was measured): with
  *     uneven heights a slope taken over a short step, a pixel of alignment
  *     rounding included, would otherwise be multiplied by a long gap.  With
