@@ -614,12 +614,12 @@ static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2],
           /* only shrinking toward the end; with a slice beyond the other
            * side, as steep as the three-point slope says (as at the first or
            * last input slice), else the gap's secant */
-          const double e = outer[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d,
-                                                               LSM_AT(outer[other], i, j) / h_outer[other])
-                                        : d;
+          const double beyond_other =
+              outer[other] ? LSM_AT(outer[other], i, j) / h_outer[other] : 0.0;
+          const double e =
+              outer[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d, beyond_other) : d;
           slope = side ? fmax(e, 0.0) : fmin(e, 0.0);
-        }
-        else if (outer[side])
+        } else if (outer[side])
           slope = side ? lsm_pchip_slope(1.0, h_outer[1], d, LSM_AT(outer[1], i, j) / h_outer[1])
                        : lsm_pchip_slope(h_outer[0], 1.0, LSM_AT(outer[0], i, j) / h_outer[0], d);
         else if (outer[other] || end[other])
