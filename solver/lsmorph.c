@@ -1015,6 +1015,19 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
                 "the volume files hold one z spacing, the mean (%.4g): heights.txt has each "
                 "slice's height\n",
                 sink.step_min, sink.step_max, sink_mean_step(&sink));
+      if (!cli->stack.per_iteration && src.count > 1 && sink.count > 0) {
+        /* the regular grid stops at the last step within the heights */
+        const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
+        const double top = z[src.count - 1], range = top - z[0], short_by = top - sink.z_last;
+        if (short_by > 1e-6 * dz) {
+          const double steps = ceil(range / dz);
+          fprintf(stderr,
+                  "lsmorph: note: the output slices stop at height %.9g, %.4g below the last "
+                  "input slice (%.9g), which is not in the volume: the step %.9g does not divide "
+                  "the heights' range %.9g; --dz %.15g (%.0f steps) ends on it\n",
+                  sink.z_last, short_by, top, dz, range, range / steps, steps);
+        }
+      }
       const char *files[16];
       size_t nfiles = output_files(cli, files, 16);
       fprintf(stderr, "lsmorph: wrote %zu slices to %s (", sink.count, cli->out_dir);

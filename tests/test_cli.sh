@@ -134,6 +134,25 @@ assert d["output"]["slices"] == 25 and d["output"]["evenly_spaced"] is True, d["
 fi
 check "no temporary folder left next to OUT" sh -c "! ls -d '$OUT'.tmp-* >/dev/null 2>&1"
 
+# ---- a --dz that does not divide the heights' range (0 .. 240) ------------------------------
+"$LSM" reconstruct "$SET" -o "$TMP/out-dz7" --input outline --heights "$SET/heights.txt" --dz 7 \
+  --no-preview --no-slices >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--dz 7 exits 0 (got $rc)" [ $rc -eq 0 ]
+check "--dz 7: a note says the slices stop at 238, 2 below the last input slice" \
+  grep -q "note: the output slices stop at height 238, 2 below the last input slice (240)" "$TMP/e"
+check "--dz 7: the note names a --dz that ends on it (35 steps)" \
+  grep -q -e "--dz 6.85714285714286 (35 steps) ends on it" "$TMP/e"
+check "--dz 7: heights.txt ends at 238" [ "$(tail -n 1 "$TMP/out-dz7/heights.txt")" = "238" ]
+"$LSM" reconstruct "$SET" -o "$TMP/out-dz" --input outline --heights "$SET/heights.txt" \
+  --dz 6.85714285714286 --no-preview --no-slices >"$TMP/o" 2>"$TMP/e"
+check "--dz 6.85714285714286 ends on the last input slice: no such note" \
+  sh -c "! grep -q 'output slices stop at' '$TMP/e'"
+check "--dz 6.85714285714286: 36 slices" [ "$(lines "$TMP/out-dz/heights.txt")" -eq 36 ]
+"$LSM" reconstruct "$SET" -o "$TMP/out-dz" --input outline --heights "$SET/heights.txt" \
+  --dz 10 --no-preview --no-slices >"$TMP/o" 2>"$TMP/e"
+check "--dz 10 divides the range: no such note" sh -c "! grep -q 'output slices stop at' '$TMP/e'"
+
 # Input heights far closer than --dz: the one output slice, at the first height, is the first
 # input slice (the output grid gave it to a later slice when the gaps were under 1e-6 dz).
 "$LSM" reconstruct "$SET" -o "$TMP/out-far" --input outline --spacing 1 --dz 1000 -q --no-preview \
