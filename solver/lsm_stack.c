@@ -556,8 +556,11 @@ static void gap_paste_parts(const gap *g, double s, float *out) {
  *     the slices it is flat there instead of running straight at it (the
  *     secant, the rule before); where it shrinks toward the end, the
  *     three-point slope below from the gap and the interval beyond the other
- *     slice, as if the data ended here (the secant when there is no such
- *     interval).  A rounded solid's profile is curved at its last sections,
+ *     slice, as if the data ended here (where that slice is a last section
+ *     too, an object with two sections, the interval to the empty slice
+ *     beyond it, counted as its section eroded by its largest depth R; the
+ *     secant when the other slice is the first or last input slice).  A
+ *     rounded solid's profile is curved at its last sections,
  *     and the secant drew the gap beside them too thin: a ball cut every
  *     16th slice, 0.974 -> 0.995 Dice over those gaps.  The end gap itself
  *     continues with the secant (run_gap_cap), so the surface has a crease
@@ -612,12 +615,13 @@ static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2],
         double slope;
         if (end[side]) {
           /* only shrinking toward the end; with a slice beyond the other
-           * side, as steep as the three-point slope says (as at the first or
-           * last input slice), else the gap's secant */
-          const double beyond_other =
-              outer[other] ? LSM_AT(outer[other], i, j) / h_outer[other] : 0.0;
+           * side, empty or not, as steep as the three-point slope says (as at
+           * the first or last input slice), else the gap's secant */
           const double e =
-              outer[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d, beyond_other) : d;
+              outer[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d,
+                                                  LSM_AT(outer[other], i, j) / h_outer[other])
+              : end[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d, end_secant[other])
+                           : d;
           slope = side ? fmax(e, 0.0) : fmin(e, 0.0);
         } else if (outer[side])
           slope = side ? lsm_pchip_slope(1.0, h_outer[1], d, LSM_AT(outer[1], i, j) / h_outer[1])

@@ -517,6 +517,40 @@ static void test_ball_beside_ends(void **state) {
   }
 }
 
+/* An object with two sections, each a last section: the slope at the
+ * smaller one takes the three-point slope through the empty slice beyond the
+ * larger one, counted as that section eroded by its largest depth (as at the
+ * first or last input slice).  A ball of radius 20 centred at z = 26, cut
+ * every 16 units (empty at z = 0 and 48, radii 17.3 and 19.1 at 16 and 32):
+ * halfway, at z = 24, the ball's radius is 19.9, above both sections (its
+ * equator lies between them), which no monotone profile passes; the
+ * section there has an area-equivalent radius of 19.1 with ls and blend (18.3
+ * with the secant, the slope when there was no third section). */
+static void test_two_sections(void **state) {
+  (void)state;
+  double z[4], radius[4];
+  for (int k = 0; k < 4; ++k) {
+    z[k] = 16.0 * k;
+    const double h = z[k] - 26.0;
+    radius[k] = 20.0 * 20.0 - h * h > 0 ? sqrt(20.0 * 20.0 - h * h) : 0.0;
+  }
+  disc_source src = {64, radius, NULL};
+  for (int method = 0; method < 2; ++method) {
+    lsm_stack_opts o;
+    lsm_stack_opts_default(&o);
+    o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+    o.dz = 1.0;
+    record rec = {0};
+    run_stack(&src, z, 4, &o, &rec);
+    const double area = (double)slice_inside(&rec, slice_at(&rec, 24.0), NULL);
+    const double r = sqrt(area / acos(-1.0));
+    print_message("%s, z = 24: radius %.2f (sections 17.32 and 19.08, the ball's 19.90)\n",
+                  method ? "blend" : "ls", r);
+    assert_true(r > 18.7 && r < 19.9);
+    record_free(&rec);
+  }
+}
+
 /* Next to an empty slice the slope at the last section is the one the end
  * gap continues with: 0 where the section grows toward the end.  Radii 20 at
  * z = 8 and 16 at z = 16 (the widest part between them, the object ending
@@ -825,6 +859,7 @@ int main(void) {
       cmocka_unit_test(test_first_slice_slope),
       cmocka_unit_test(test_end_neighbour_flat),
       cmocka_unit_test(test_ball_beside_ends),
+      cmocka_unit_test(test_two_sections),
       cmocka_unit_test(test_morph_weight),
       cmocka_unit_test(test_aligned_path),
   };
