@@ -489,26 +489,42 @@ static void test_first_slice_slope(void **state) {
  * of radius 20.7, 24.9 and 17.3): the section halfway through each interior
  * gap, z = 24 and 40, has the ball's radius (24.3 and 22.9) within 0.5 px
  * with ls and blend; with the secant it was about 1 px small at z = 24. */
+/* Radius of a ball of radius R centred at z = centre at height z (0 outside it). */
+static double ball_radius(double R, double centre, double z) {
+  const double h = z - centre;
+  return R * R - h * h > 0 ? sqrt(R * R - h * h) : 0.0;
+}
+
+/* A ball of radius R centred at z = centre cut every 16 units from z = 0 (n
+ * sections), run with ls (method 0) or blend (1) at dz = 1 into rec. */
+static void run_cut_ball(double R, double centre, size_t n, int size, int method, record *rec) {
+  double z[8], radius[8];
+  assert_true(n <= 8);
+  for (size_t k = 0; k < n; ++k) {
+    z[k] = 16.0 * (double)k;
+    radius[k] = ball_radius(R, centre, z[k]);
+  }
+  disc_source src = {size, radius, NULL};
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+  o.dz = 1.0;
+  run_stack(&src, z, n, &o, rec);
+}
+
+/* The radius of the disc with the area of the output slice at height z. */
+static double radius_at(const record *rec, double z) {
+  return sqrt((double)slice_inside(rec, slice_at(rec, z), NULL) / acos(-1.0));
+}
+
 static void test_ball_beside_ends(void **state) {
   (void)state;
-  double z[5], radius[5];
-  for (int k = 0; k < 5; ++k) {
-    z[k] = 16.0 * k;
-    const double h = z[k] - 30.0;
-    radius[k] = 25.0 * 25.0 - h * h > 0 ? sqrt(25.0 * 25.0 - h * h) : 0.0;
-  }
-  disc_source src = {80, radius, NULL};
   for (int method = 0; method < 2; ++method) {
-    lsm_stack_opts o;
-    lsm_stack_opts_default(&o);
-    o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
-    o.dz = 1.0;
     record rec = {0};
-    run_stack(&src, z, 5, &o, &rec);
+    run_cut_ball(25.0, 30.0, 5, 80, method, &rec);
     const double at[2] = {24.0, 40.0};
     for (int k = 0; k < 2; ++k) {
-      const double area = (double)slice_inside(&rec, slice_at(&rec, at[k]), NULL);
-      const double r = sqrt(area / acos(-1.0)), truth = sqrt(25.0 * 25.0 - (at[k] - 30.0) * (at[k] - 30.0));
+      const double r = radius_at(&rec, at[k]), truth = ball_radius(25.0, 30.0, at[k]);
       print_message("%s, z = %g: radius %.2f, the ball's %.2f\n", method ? "blend" : "ls", at[k], r,
                     truth);
       assert_true(fabs(r - truth) < 0.5);
@@ -528,22 +544,10 @@ static void test_ball_beside_ends(void **state) {
  * with the secant, the slope when there was no third section). */
 static void test_two_sections(void **state) {
   (void)state;
-  double z[4], radius[4];
-  for (int k = 0; k < 4; ++k) {
-    z[k] = 16.0 * k;
-    const double h = z[k] - 26.0;
-    radius[k] = 20.0 * 20.0 - h * h > 0 ? sqrt(20.0 * 20.0 - h * h) : 0.0;
-  }
-  disc_source src = {64, radius, NULL};
   for (int method = 0; method < 2; ++method) {
-    lsm_stack_opts o;
-    lsm_stack_opts_default(&o);
-    o.method = method ? LSM_METHOD_BLEND : LSM_METHOD_LS;
-    o.dz = 1.0;
     record rec = {0};
-    run_stack(&src, z, 4, &o, &rec);
-    const double area = (double)slice_inside(&rec, slice_at(&rec, 24.0), NULL);
-    const double r = sqrt(area / acos(-1.0));
+    run_cut_ball(20.0, 26.0, 4, 64, method, &rec);
+    const double r = radius_at(&rec, 24.0);
     print_message("%s, z = 24: radius %.2f (sections 17.32 and 19.08, the ball's 19.90)\n",
                   method ? "blend" : "ls", r);
     assert_true(r > 18.7 && r < 19.9);
