@@ -1273,6 +1273,10 @@ static int grid_not_above(const output_grid *g, size_t k, double z) {
   return (double)k * g->dz <= (z - g->z0) + g->eps;
 }
 
+double lsm_stack_output_dz(const lsm_stack_opts *opts) {
+  return opts->dz > 0.0 ? opts->dz : opts->pixel_size;
+}
+
 size_t lsm_stack_output_count(const double *z, size_t count, double dz) {
   if (count == 0 || !(dz > 0.0)) return 0;
   const output_grid g = output_grid_of(z, count, dz);
@@ -1584,7 +1588,7 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
                     LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   if (opts->per_iteration && opts->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a solver method, not blend");
-  const double dz = opts->dz > 0.0 ? opts->dz : opts->pixel_size;
+  const double dz = lsm_stack_output_dz(opts);
   const double z_mag = fmax(fabs(src->z[0]), fabs(src->z[src->count - 1]));
   for (size_t i = 1; opts->per_iteration && i < src->count; ++i)
     if (!lsm_output_step_resolved((src->z[i] - src->z[i - 1]) / ((double)opts->max_iter + 1.0),

@@ -233,6 +233,10 @@ typedef struct lsm_progress {
   void (*update)(void *ctx, size_t done, size_t total, size_t pair, size_t pairs);
 } lsm_progress;
 
+/* The output slice spacing of default mode: --dz, or the pixel size when it
+ * is not set (isotropic voxels). */
+double lsm_stack_output_dz(const lsm_stack_opts *opts);
+
 /* Number of output slices in default mode: the heights z[0] + k dz up to
  * the last input height (within a millionth of dz or of the closest pair of
  * input heights).  At least LSM_OUTPUT_COUNT_MAX is returned as that. */

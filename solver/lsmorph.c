@@ -410,7 +410,7 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
           o->per_iteration ? "true" : "false");
   lsm_json_number(f, o->pixel_size);
   fputs(", \"dz\": ", f);
-  lsm_json_number(f, o->dz > 0 ? o->dz : o->pixel_size);
+  lsm_json_number(f, lsm_stack_output_dz(o));
   fprintf(f, ", \"invert\": %s, \"threads\": %d, \"values\": ", cli->invert ? "true" : "false",
           threads);
   lsm_json_string(f, lsm_values_name((lsm_values)cli->values));
@@ -680,7 +680,7 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                         k + 1, k + 2, z[k + 1] - z[k], z_mag, cli->stack.max_iter);
     }
   } else {
-    const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
+    const double dz = lsm_stack_output_dz(&cli->stack);
     if (!lsm_output_step_resolved(dz, z_mag))
       return lsm_fail(err, LSM_ERR_INPUT, heights_name,
                       "output steps of %g (%s) at heights near %g would repeat heights (double "
@@ -733,7 +733,7 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                       (unsigned long long)cli->max_pixels);
   }
   if (!cli->stack.per_iteration) {
-    const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
+    const double dz = lsm_stack_output_dz(&cli->stack);
     const size_t count = lsm_stack_output_count(z, src->count, dz);
     const double slices = (double)count;
     const double voxels = slices * (double)w * (double)h;
@@ -933,7 +933,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     sink.max_voxels = cli->max_voxels;
     sink.input = cli->slice_dir;
     const double pixel = cli->stack.pixel_size;
-    const double dz = cli->stack.dz > 0 ? cli->stack.dz : pixel;
+    const double dz = lsm_stack_output_dz(&cli->stack);
     st = lsm_volume_writer_open(tmp, cli->formats, (lsm_values)cli->values, width, height, pixel,
                                 pixel, dz, 0.0, 0.0, z[0], &sink.volume, err);
     /* the mesh caps an object cut by the first or last slice half a slice step
@@ -968,7 +968,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     if (st == LSM_ERR_NUMERIC) name_failed_pair(err, &src, stats);
   }
   if (st == LSM_OK) {
-    double sz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
+    double sz = lsm_stack_output_dz(&cli->stack);
     if (cli->stack.per_iteration && sink.count > 1)
       sz = sink_mean_step(&sink);
     st = lsm_volume_writer_finish(&sink.volume, sz, sink.count, err);
@@ -1017,7 +1017,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
                 sink.step_min, sink.step_max, sink_mean_step(&sink));
       if (!cli->stack.per_iteration && src.count > 1 && sink.count > 0) {
         /* the regular grid stops at the last step within the heights */
-        const double dz = cli->stack.dz > 0 ? cli->stack.dz : cli->stack.pixel_size;
+        const double dz = lsm_stack_output_dz(&cli->stack);
         const double top = z[src.count - 1], range = top - z[0], short_by = top - sink.z_last;
         if (short_by > 1e-6 * dz) {
           const double steps = ceil(range / dz);
