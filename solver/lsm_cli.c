@@ -151,7 +151,9 @@ static const char reconstruct_help_running[] =
 static const char reconstruct_help_files[] =
     "Files written to OUT_DIR:\n"
     "  volume.nrrd            float32 signed distance (negative inside) of every output\n"
-    "                         slice, x fastest, spacings in physical units\n"
+    "                         slice, x fastest, spacings in physical units: exact at\n"
+    "                         the input slices, between them the interpolated level\n"
+    "                         set (zero on the surface, close to a distance near it)\n"
     "  volume.mha             the same as MetaImage (--format mha; header + data in\n"
     "                         one file, little endian)\n"
     "  volume.vtk             the same as legacy VTK STRUCTURED_POINTS (--format vtk;\n"
