@@ -6,6 +6,7 @@
 #endif
 #include "lsm_io.h"
 
+#include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -57,12 +58,24 @@ static int cmp_paths(const void *a, const void *b) {
   return lsm_natural_cmp(base_name(pa), base_name(pb));
 }
 
-static int ends_with_png(const char *name) {
-  size_t n = strlen(name);
-  if (n < 4) return 0;
-  const char *e = name + n - 4;
-  return e[0] == '.' && (e[1] == 'p' || e[1] == 'P') && (e[2] == 'n' || e[2] == 'N') &&
-         (e[3] == 'g' || e[3] == 'G');
+/* Whether name ends in "." ext, any case. */
+static int has_extension(const char *name, const char *ext) {
+  const size_t n = strlen(name), k = strlen(ext);
+  if (n <= k || name[n - k - 1] != '.') return 0;
+  for (size_t i = 0; i < k; ++i)
+    if (tolower((unsigned char)name[n - k + i]) != ext[i]) return 0;
+  return 1;
+}
+
+static int ends_with_png(const char *name) { return has_extension(name, "png"); }
+
+/* Other image formats slices often come in (a note counts those left out). */
+static int other_image(const char *name) {
+  static const char *const exts[] = {"tif", "tiff", "jpg", "jpeg", "bmp", "gif", "pgm", "ppm",
+                                     "pbm", "pnm", "webp", "jp2", "dcm", NULL};
+  for (const char *const *e = exts; *e; ++e)
+    if (has_extension(name, *e)) return 1;
+  return 0;
 }
 
 void lsm_path_list_free(char **paths, size_t count) {
@@ -71,9 +84,11 @@ void lsm_path_list_free(char **paths, size_t count) {
   free(paths);
 }
 
-lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, lsm_err *err) {
+lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, size_t *others,
+                            lsm_err *err) {
   if (paths) *paths = NULL;
   if (count) *count = 0;
+  if (others) *others = 0;
   if (!dir || !paths || !count) return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad arguments to the folder listing");
 
   struct stat sb;
@@ -98,7 +113,8 @@ lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, lsm_e
       break;
     }
     const char *name = e->d_name;
-    if (name[0] == '.' || !ends_with_png(name)) continue;
+    const int png = ends_with_png(name);
+    if (name[0] == '.' || (!png && !(others && other_image(name)))) continue;
     size_t name_len = strlen(name);
     size_t len = dir_len + (size_t)need_slash + name_len + 1;
     char *path = malloc(len);
@@ -111,6 +127,11 @@ lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, lsm_e
     memcpy(path + dir_len + (size_t)need_slash, name, name_len + 1);
 
     struct stat fs, ls;
+    if (!png) { /* another image format: counted when it is a regular file */
+      if (stat(path, &fs) == 0 && S_ISREG(fs.st_mode)) ++*others;
+      free(path);
+      continue;
+    }
     if (stat(path, &fs) != 0) {
       /* a file that vanished since the listing is skipped; a broken link is
        * an error (skipping it would shift every later slice's height) */

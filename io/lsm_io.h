@@ -73,8 +73,11 @@ lsm_status lsm_png_write_rgb8(const char *path, const uint8_t *pixels, int width
 int lsm_natural_cmp(const char *a, const char *b);
 
 /* Lists the regular files of dir whose name ends in ".png" (any case), in
- * natural order, as full paths "dir/name".  Free with lsm_path_list_free. */
-lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, lsm_err *err);
+ * natural order, as full paths "dir/name".  Free with lsm_path_list_free.
+ * others (NULL: not counted): the regular files left out whose names end
+ * like another image format (.tif, .jpg, .bmp, .pgm, .dcm, ...; not hidden). */
+lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, size_t *others,
+                            lsm_err *err);
 void lsm_path_list_free(char **paths, size_t count);
 
 /* ---- heights -------------------------------------------------------------- */

@@ -205,11 +205,12 @@ static const char score_help[] =
     "  mean_surface     mean surface distance over the slices non-empty on both sides\n"
     "  volume_error     (result - truth) / truth volume over the held-out slices\n"
     "  one_sided_empty  held-out slices empty on one side only\n"
-    "A score that is undefined (no boundary anywhere, an empty truth) is null.\n"
+    "A score that is undefined is null: the distances where no slice has a boundary,\n"
+    "the volume error where the truth is empty.\n"
     "A result that does not fit TRUTH_DIR and K is refused: its slice count must be\n"
     "the one --spacing K gives, its run.json must count the kept slices, and every\n"
     "kept slice must come back exactly.  (Slices written by another tool, with no\n"
-    "run.json, are scored without the count check.)\n";
+    "run.json, are scored without the check of run.json's kept-slice count.)\n";
 
 static const char devices_help[] =
     "Usage: lsmorph devices\n"
@@ -334,7 +335,19 @@ static void cli_defaults(lsm_cli *cli) {
   lsm_stack_opts_default(&cli->stack);
 }
 
+/* The entry of list (NULL-terminated) equal to name, or NULL. */
+static const char *listed(const char *name, const char *const *list) {
+  for (; *list; ++list)
+    if (strcmp(name, *list) == 0) return *list;
+  return NULL;
+}
+
 static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
+  static const char *const solver_options[] = {"--scheme",   "--time",         "--cfl",
+                                               "--max-iter", "--reinit-every", "--reinit-iters",
+                                               NULL};
+  static const char *const pls_options[] = {"--particles-per-cell", "--pls-reseed",
+                                            "--pls-radius-adjust", "--seed", NULL};
   lsm_stack_opts *so = &cli->stack;
   int options = 1; /* until "--": after it every argument is SLICE_DIR */
   for (; c->i < c->argc; ++c->i) {
@@ -492,6 +505,10 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     }
     if (inline_value && !v)
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes no value", name);
+    if (!cli->solver_option) cli->solver_option = listed(name, solver_options);
+    if (!cli->pls_option) cli->pls_option = listed(name, pls_options);
+    cli->tol_given |= IS("--tol");
+    cli->device_given |= IS("--device");
 #undef NEEDS_VALUE
 #undef IS
   }

@@ -41,6 +41,11 @@ typedef struct lsm_cli {
   int preview;               /* preview.png and preview3d.png (--no-preview: 0) */
   lsm_stack_opts stack;
   int interp_given, ends_given; /* --interp / --ends on the command line */
+  /* options given that may not apply to the run (a note then says so): the
+   * first solver option (--scheme, --time, --cfl, --max-iter, --reinit-*), the
+   * first particle option (--particles-per-cell, --pls-*, --seed) */
+  const char *solver_option, *pls_option;
+  int tol_given, device_given;
   /* score */
   const char *truth_dir;
   const char *result_dir;

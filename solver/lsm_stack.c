@@ -77,10 +77,8 @@ void lsm_stack_opts_default(lsm_stack_opts *opts) {
 }
 
 void lsm_stack_opts_resolve(lsm_stack_opts *opts) {
-  if (opts->per_iteration) {
-    opts->interp = LSM_INTERP_LINEAR;
-    opts->ends = LSM_ENDS_HALFWAY;
-  }
+  if (opts->per_iteration) opts->interp = LSM_INTERP_LINEAR;
+  if (opts->interp == LSM_INTERP_LINEAR) opts->ends = LSM_ENDS_HALFWAY;
 }
 
 static double now_seconds(void) {

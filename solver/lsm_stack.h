@@ -149,9 +149,10 @@ typedef struct lsm_stack_opts {
 void lsm_stack_opts_default(lsm_stack_opts *opts);
 
 /* The options a run actually uses: per_iteration (the design document's mode)
- * takes the linear profile and ends an object at mid-gap, whatever interp and
- * ends say.  lsm_stack_run applies this to its own copy; callers that record
- * the options (run.json) apply it first. */
+ * takes the linear profile, whatever interp says, and the linear profile ends
+ * an object at mid-gap, whatever ends says (recorded as halfway).
+ * lsm_stack_run applies this to its own copy; callers that record the options
+ * (run.json) apply it first. */
 void lsm_stack_opts_resolve(lsm_stack_opts *opts);
 
 /* Where input slices come from (the CLI reads PNG files; tests synthesise). */

@@ -157,8 +157,8 @@ static lsm_status note_dark_labels(const char *path, const lsm_png_read_opts *ro
   lsm_mask_free(&m);
   if (nonzero < all && nonzero - bright >= bright)
     fprintf(stderr,
-            "lsmorph: note: %s: %zu pixels are non-zero but below 50 %% luminance, more than "
-            "the %zu at or above it; they read as background (for a label map, write a mask "
+            "lsmorph: note: %s: %zu pixels are non-zero but below 50 %% luminance, as many "
+            "as or more than the %zu at or above it; they read as background (for a label map, write a mask "
             "of the labels wanted)\n",
             path, nonzero - bright, bright);
   return LSM_OK;
@@ -812,7 +812,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   lsm_gap_transport mine = *transport;
   mine.ctx = &counted;
   mine.send = counted_send;
-  lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, err);
+  lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, NULL, err);
   if (st == LSM_OK && src.count < 2)
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "need at least two PNG slices");
   if (st == LSM_OK && (size_t)transport->rank >= src.count - 1) { /* no gap of its own */
@@ -875,7 +875,12 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   out_sink sink;
   memset(&sink, 0, sizeof sink);
   char tmp[4096] = "";
-  lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, err);
+  size_t others = 0;
+  lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, &others, err);
+  if (st == LSM_OK && others && !cli->quiet)
+    fprintf(stderr, "lsmorph: note: %s: %zu image file%s in another format than PNG (.tif, "
+                    ".jpg, ...) left out: slices are read from PNG files only\n",
+            cli->slice_dir, others, others == 1 ? "" : "s");
   if (st == LSM_OK && src.count == 0)
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "no PNG files in this folder");
   if (st == LSM_OK && src.count == 1)
@@ -906,6 +911,22 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
          (cli->ends_given && cli->stack.ends != LSM_ENDS_HALFWAY)))
       fprintf(stderr, "lsmorph: note: --per-iteration takes the linear profile and ends an "
                       "object at mid-gap: --interp cubic and --ends tip|auto have no effect\n");
+    else if (cli->stack.interp == LSM_INTERP_LINEAR && cli->ends_given &&
+             cli->stack.ends != LSM_ENDS_HALFWAY)
+      fprintf(stderr, "lsmorph: note: --interp linear ends an object at mid-gap: --ends "
+                      "tip|auto have no effect (they shape the cubic profile's ends)\n");
+    if (cli->stack.method == LSM_METHOD_BLEND && cli->solver_option)
+      fprintf(stderr, "lsmorph: note: %s has no effect with --method blend, which solves no "
+                      "PDE (no solver option does: --scheme, --time, --cfl, --max-iter, "
+                      "--reinit-every, --reinit-iters)\n", cli->solver_option);
+    if (cli->stack.method != LSM_METHOD_PLS && cli->pls_option)
+      fprintf(stderr, "lsmorph: note: %s has no effect without --method pls (it sets up the "
+                      "particles)\n", cli->pls_option);
+    if (!cli->stack.per_iteration && cli->tol_given)
+      fprintf(stderr, "lsmorph: note: --tol has no effect without --per-iteration (it stops "
+                      "each pair of that mode)\n");
+    if (cli->backend == LSM_BACKEND_C && cli->device_given)
+      fprintf(stderr, "lsmorph: note: --device has no effect with --backend c\n");
   }
   lsm_stack_opts_resolve(&cli->stack); /* run.json records what the run uses */
   const int threads = setup_run(cli);
@@ -1089,7 +1110,7 @@ static lsm_status check_stdout(lsm_err *err) {
 static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   char **truth = NULL;
   size_t n = 0;
-  LSM_TRY(lsm_dir_list_png(cli->truth_dir, &truth, &n, err));
+  LSM_TRY(lsm_dir_list_png(cli->truth_dir, &truth, &n, NULL, err));
   if (n <= (size_t)cli->stride) { /* nothing held out between two inputs */
     lsm_path_list_free(truth, n);
     return lsm_fail(err, LSM_ERR_INPUT, cli->truth_dir,
@@ -1114,7 +1135,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
       st = lsm_fail(err, LSM_ERR_INPUT, dir,
                     "no such folder: score reads the result's slices (a reconstruct run with "
                     "--no-slices has none)");
-    if (st == LSM_OK) st = lsm_dir_list_png(dir, &result, &m, err);
+    if (st == LSM_OK) st = lsm_dir_list_png(dir, &result, &m, NULL, err);
     lsm_path_list_free(result, m);
     if (st == LSM_OK && m != last_input + 1)
       st = lsm_fail(err, LSM_ERR_INPUT, dir,

@@ -301,6 +301,48 @@ check "--ends halfway exits 0 (got $rc)" [ $rc -eq 0 ]
 check "run.json options say \"ends\": \"halfway\"" grep -q '"ends": "halfway"' "$TMP/out-halfway/run.json"
 check "--ends halfway: the same volume without empty slices" cmp -s "$OUT/volume.nrrd" "$TMP/out-halfway/volume.nrrd"
 
+# Options that do not apply to the run: a note each, the result unchanged; run.json records the
+# end rule the linear profile uses (mid-gap: halfway).
+"$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-lin-half" --spacing 8 --interp linear \
+  --ends halfway --format raw --no-preview >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--interp linear --ends halfway exits 0 (got $rc)" [ $rc -eq 0 ]
+check "--interp linear --ends halfway: no note about --ends" sh -c "! grep -q 'ends tip|auto have no effect' '$TMP/e'"
+"$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-lin-tip" --spacing 8 --interp linear \
+  --ends tip --format raw --no-preview --tol 0.1 --seed 7 --device 1 >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--interp linear --ends tip exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "--interp linear --ends tip: a note says --ends has no effect" grep -q "note: --interp linear ends an object at mid-gap: --ends tip|auto have no effect" "$TMP/e"
+check "--interp linear --ends tip: run.json records halfway" grep -q '"interp": "linear", "ends": "halfway"' "$TMP/out-lin-tip/run.json"
+check "--interp linear: --ends tip gives the same volume as halfway" cmp -s "$TMP/out-lin-half/volume.raw" "$TMP/out-lin-tip/volume.raw"
+check "--tol without --per-iteration: a note" grep -q "note: --tol has no effect without --per-iteration" "$TMP/e"
+check "--seed with ls: a note" grep -q "note: --seed has no effect without --method pls" "$TMP/e"
+check "--device with the C backend: a note" grep -q "note: --device has no effect with --backend c" "$TMP/e"
+"$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-blend" --spacing 8 --method blend --format raw \
+  --no-preview >"$TMP/o" 2>"$TMP/e"
+"$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-blend-cfl" --spacing 8 --method blend --format raw \
+  --no-preview --time rk3 --cfl 0.3 >"$TMP/o" 2>"$TMP/e2"
+rc=$?
+check "blend --time rk3 --cfl 0.3 exits 0 (got $rc)" [ $rc -eq 0 ]
+check "blend --time rk3: a note names --time" grep -q "note: --time has no effect with --method blend" "$TMP/e2"
+check "blend without solver options: no such note" sh -c "! grep -q 'has no effect' '$TMP/e'"
+check "blend: the solver options change nothing" cmp -s "$TMP/out-blend/volume.raw" "$TMP/out-blend-cfl/volume.raw"
+"$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-pls-seed" --spacing 8 --method pls --seed 7 \
+  --no-preview --format raw >"$TMP/o" 2>"$TMP/e"
+check "--seed with pls: no note" sh -c "! grep -q 'has no effect' '$TMP/e'"
+# image files of another format in the slice folder are left out, with a note counting them
+mkdir -p "$TMP/with-tif"
+cp "$TMP/unit-end/"*.png "$TMP/with-tif/"
+printf 'x' >"$TMP/with-tif/4.tif"
+printf 'x' >"$TMP/with-tif/5.JPG"
+printf 'x' >"$TMP/with-tif/notes.txt"
+"$LSM" reconstruct "$TMP/with-tif" -o "$TMP/out-with-tif" --spacing 8 --no-preview >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "a folder with .tif and .jpg files besides the PNGs exits 0 (got $rc)" [ $rc -eq 0 ]
+check "a note counts the 2 image files of another format" grep -q "with-tif: 2 image files in another format than PNG" "$TMP/e"
+"$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-no-tif" --spacing 8 --no-preview >"$TMP/o" 2>"$TMP/e"
+check "PNG slices only: no such note" sh -c "! grep -q 'another format than PNG' '$TMP/e'"
+
 # The same command into an existing OUT replaces it.
 "$LSM" reconstruct "$SET" -o "$OUT" --input outline --heights "$SET/heights.txt" --dz 40 -q \
   >"$TMP/o" 2>"$TMP/e"

@@ -791,7 +791,8 @@ static void test_png_write_errors(void **state) {
 
 static void test_dir_list(void **state) {
   tmp_fixture *f = *state;
-  const char *files[] = {"10.png", "2.png", "1.PNG", "notes.txt", ".hidden.png", "png", "x.png.txt"};
+  const char *files[] = {"10.png", "2.png",   "1.PNG",  "notes.txt", ".hidden.png",
+                         "png",    "x.png.txt", "3.TIF", "4.jpeg",    ".5.tif"};
   char path[256];
   for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
     join(path, sizeof path, f->dir, files[i]);
@@ -804,8 +805,12 @@ static void test_dir_list(void **state) {
   size_t n = 0;
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(lsm_dir_list_png(f->dir, &list, &n, &err), LSM_OK);
+  size_t others = 99;
+  assert_int_equal(lsm_dir_list_png(f->dir, &list, &n, &others, &err), LSM_OK);
   assert_int_equal(n, 3);
+  /* images of other formats: 3.TIF and 4.jpeg (not the hidden .5.tif, nor
+   * notes.txt, png, x.png.txt) */
+  assert_int_equal(others, 2);
   const char *want[] = {"1.PNG", "2.png", "10.png"};
   for (size_t i = 0; i < 3; ++i) {
     join(path, sizeof path, f->dir, want[i]);
@@ -816,7 +821,7 @@ static void test_dir_list(void **state) {
   /* a trailing slash does not double up */
   char slashed[256];
   snprintf(slashed, sizeof slashed, "%s/", f->dir);
-  assert_int_equal(lsm_dir_list_png(slashed, &list, &n, &err), LSM_OK);
+  assert_int_equal(lsm_dir_list_png(slashed, &list, &n, NULL, &err), LSM_OK);
   assert_int_equal(n, 3);
   join(path, sizeof path, f->dir, "1.PNG");
   assert_string_equal(list[0], path);
@@ -825,7 +830,7 @@ static void test_dir_list(void **state) {
   /* an empty folder lists nothing */
   join(path, sizeof path, f->dir, "empty");
   assert_int_equal(mkdir(path, 0755), 0);
-  assert_int_equal(lsm_dir_list_png(path, &list, &n, &err), LSM_OK);
+  assert_int_equal(lsm_dir_list_png(path, &list, &n, NULL, &err), LSM_OK);
   assert_int_equal(n, 0);
   lsm_path_list_free(list, n);
 }
@@ -838,7 +843,7 @@ static void test_dir_errors(void **state) {
   lsm_err err;
   join(path, sizeof path, f->dir, "nope");
   lsm_err_clear(&err);
-  assert_int_equal(lsm_dir_list_png(path, &list, &n, &err), LSM_ERR_INPUT);
+  assert_int_equal(lsm_dir_list_png(path, &list, &n, NULL, &err), LSM_ERR_INPUT);
   assert_null(list);
   assert_int_equal(n, 0);
   assert_msg_contains(err, path);
@@ -847,7 +852,7 @@ static void test_dir_errors(void **state) {
   join(path, sizeof path, f->dir, "file.png");
   write_bytes(path, "x", 1);
   lsm_err_clear(&err);
-  assert_int_equal(lsm_dir_list_png(path, &list, &n, &err), LSM_ERR_INPUT);
+  assert_int_equal(lsm_dir_list_png(path, &list, &n, NULL, &err), LSM_ERR_INPUT);
   assert_msg_contains(err, "not a folder");
 }
 
