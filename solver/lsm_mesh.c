@@ -115,6 +115,19 @@ static inline int is_pad(const lsm_mesh *m, int i, int j, long p) {
   return i == 0 || j == 0 || i == m->w - 1 || j == m->h - 1 || p == 0 || p == m->pad_top;
 }
 
+/* The least fraction of an edge from a to b (one coordinate) that float32,
+ * in which the PLY stores vertices, still tells from its ends: two units in
+ * the last place at the larger end.  Large coordinates (heights far from 0
+ * against the slice step, very wide slices) would otherwise round a vertex
+ * kept 1/256 of the edge from a node onto the node. */
+static double float_least(double a, double b) {
+  const double len = fabs(b - a);
+  if (!(len > 0.0)) return 0.0;
+  const float big = (float)fmax(fabs(a), fabs(b));
+  const double ulp = (double)nextafterf(big, INFINITY) - (double)big;
+  return 2.0 * ulp / len;
+}
+
 /* Where a vertex sits along its edge, as a fraction from node a (phi va) to
  * node b (phi vb), one inside (phi <= 0), the other outside.  An edge into the
  * pad layer is cut half-way, so the caps of an object cut by the volume's
@@ -122,11 +135,14 @@ static inline int is_pad(const lsm_mesh *m, int i, int j, long p) {
  * direction.  Elsewhere the zero of the linear interpolant, kept 1/256 of the
  * edge from its ends: a node where phi is exactly 0 (an outline's contour
  * pixels, a blend's tie) would otherwise put the vertices of all its edges on
- * one point, with triangles of no area. */
+ * one point, with triangles of no area; farther where float32 could not
+ * tell the vertex from the node (float_least). */
 static double edge_fraction(const lsm_mesh *m, int i, int j, long p, int i2, int j2, long p2,
-                            double va, double vb) {
+                            double va, double vb, const double a[3], const double b[3]) {
   if (is_pad(m, i, j, p) != is_pad(m, i2, j2, p2)) return 0.5;
-  const double least = 1.0 / 256.0;
+  double least = 1.0 / 256.0;
+  for (int c = 0; c < 3; ++c) least = fmax(least, float_least(a[c], b[c]));
+  if (least > 0.5) least = 0.5; /* an edge shorter than four float steps: its midpoint */
   double t = va / (va - vb);
   if (!(t >= least)) t = least; /* also catches NaN */
   if (t > 1.0 - least) t = 1.0 - least;
@@ -141,10 +157,11 @@ static int32_t edge_vertex(lsm_mesh *m, int i, int j, long p, int d, int32_t *sl
   const long p2 = p + DZ(d);
   const double va = plane_at(m, p)[(size_t)j * w + (size_t)i];
   const double vb = plane_at(m, p2)[(size_t)j2 * w + (size_t)i2];
-  const double t = edge_fraction(m, i, j, p, i2, j2, p2, va, vb);
   const double za = m->pz[p % RING], zb = m->pz[p2 % RING];
   const double xa = (i - 1) * m->sx, ya = (j - 1) * m->sy;
   const double xb = (i2 - 1) * m->sx, yb = (j2 - 1) * m->sy;
+  const double ends_a[3] = {xa, ya, za}, ends_b[3] = {xb, yb, zb};
+  const double t = edge_fraction(m, i, j, p, i2, j2, p2, va, vb, ends_a, ends_b);
   double ga[3], gb[3], n[3] = {0.0, 0.0, 0.0};
   const int pad_a = is_pad(m, i, j, p), pad_b = is_pad(m, i2, j2, p2);
   if (pad_a != pad_b) {

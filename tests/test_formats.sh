@@ -133,6 +133,19 @@ if [ $rc -eq 0 ]; then
   mask_matches_slices "$TMP/olmask"
 fi
 
+# ---- heights far from 0: the mesh's vertices, float32 in the PLY, stay apart --------------------
+# (at 1e5 a float step is 1/128: a vertex kept 1/256 of a unit z edge from an outline's contour
+# node, where phi is 0, rounded onto it: 58 zero-area triangles on two rings before float_least)
+n_pi=$(ls "$TMP/pi-outline"/*.png | wc -l)
+awk -v n="$n_pi" 'BEGIN { for (k = 0; k < n; ++k) print 100000 + 8 * k }' >"$TMP/heights1e5.txt"
+"$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olfar" --input outline --heights "$TMP/heights1e5.txt" \
+  --format nrrd,mha,vtk,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+rc=$?
+check "reconstruct --input outline --mesh at heights from 1e5 exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+if [ $rc -eq 0 ]; then
+  run_checks "$TMP/check5" "$PY" "$HELPER" check "$TMP/olfar" --spacing 1 1 1 --values sdf --mesh --caps
+fi
+
 # ---- defaults: volume.nrrd and the previews only; --no-preview ------------------------------
 "$LSM" reconstruct "$TMP/ball" -o "$TMP/def" --spacing 8 --no-slices -q >/dev/null 2>&1
 check "default run exits 0" [ $? -eq 0 ]
