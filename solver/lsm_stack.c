@@ -611,25 +611,20 @@ static lsm_status gap_slopes(const window *w, gap *g, lsm_grid *const beyond[2],
       for (int i = 0; i < m->nx; ++i) {
         const double d = (double)LSM_AT(g->phi_b, i, j) - (double)LSM_AT(g->phi_a, i, j);
         double slope;
-        if (end[side]) {
-          /* only shrinking toward the end; with a slice beyond the other
-           * side, empty or not, as steep as the three-point slope says (as at
-           * the first or last input slice), else the gap's secant */
-          const double e =
-              outer[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d,
-                                                  LSM_AT(outer[other], i, j) / h_outer[other])
-              : end[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d, end_secant[other])
-                           : d;
-          slope = side ? fmax(e, 0.0) : fmin(e, 0.0);
-        } else if (outer[side])
+        if (outer[side]) /* a slice on both sides: the centred slope */
           slope = side ? lsm_pchip_slope(1.0, h_outer[1], d, LSM_AT(outer[1], i, j) / h_outer[1])
                        : lsm_pchip_slope(h_outer[0], 1.0, LSM_AT(outer[0], i, j) / h_outer[0], d);
-        else if (outer[other] || end[other])
-          slope = lsm_pchip_edge_slope(1.0, h_outer[other], d,
-                                       outer[other] ? LSM_AT(outer[other], i, j) / h_outer[other]
-                                                    : end_secant[other]);
-        else
-          slope = d;
+        else {
+          /* the data end on this side (no slice beyond it, or an empty one):
+           * the non-centred three-point slope through the slice beyond the
+           * other side, empty or not, else the gap's secant */
+          slope = outer[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d,
+                                                      LSM_AT(outer[other], i, j) / h_outer[other])
+                  : end[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d, end_secant[other])
+                               : d;
+          /* next to an empty slice, only shrinking toward the end */
+          if (end[side]) slope = side ? fmax(slope, 0.0) : fmin(slope, 0.0);
+        }
         LSM_AT(m, i, j) = (float)slope; /* at most 3 |d| */
       }
   }

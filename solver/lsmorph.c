@@ -158,8 +158,8 @@ static lsm_status note_dark_labels(const char *path, const lsm_png_read_opts *ro
   if (nonzero < all && nonzero - bright >= bright)
     fprintf(stderr,
             "lsmorph: note: %s: %zu pixels are non-zero but below 50 %% luminance, as many "
-            "as or more than the %zu at or above it; they read as background (for a label map, write a mask "
-            "of the labels wanted)\n",
+            "as or more than the %zu at or above it; they read as background (for a label "
+            "map, write a mask of the labels wanted)\n",
             path, nonzero - bright, bright);
   return LSM_OK;
 }
