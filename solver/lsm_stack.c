@@ -393,7 +393,19 @@ typedef struct stack_run {
   int gap_workers;       /* gaps run at once (default mode) */
 } stack_run;
 
+/* A sample of exactly 0 lies on the surface and counts as inside (phi <= 0,
+ * as the masks draw it).  Interpolating half-pixel distances makes such ties
+ * (whole rows of them where an edge moves one pixel in two steps), so they
+ * leave a millionth of a pixel below zero: a reader that takes phi < 0 as
+ * inside then draws the same shape as slices/. */
+static void break_zero_ties(float *phi, size_t cells, double pixel_size) {
+  const float below = (float)(-1e-6 * pixel_size);
+  for (size_t k = 0; k < cells; ++k)
+    if (phi[k] == 0.0f) phi[k] = below;
+}
+
 static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
+  break_zero_ties(r->out, (size_t)r->width * (size_t)r->height, r->opts->pixel_size);
   LSM_TRY(r->sink->emit(r->sink->ctx, r->out, r->width, r->height, z, input_index, err));
   r->done++;
   if (r->progress && r->progress->update)

@@ -448,6 +448,23 @@ else
   bad "natural-sort run wrote no volume.nrrd"
 fi
 
+# Discs of radius 9 and 10 blended at mid-gap: the ring between them is half a
+# pixel outside one and inside the other, so the blend ties at exactly 0 on
+# the surface (48 samples before ties were broken).  No sample is exactly 0:
+# phi < 0 and phi <= 0 give the same inside (ties count as inside).
+mkdir -p "$TMP/ties"
+printf 'gray8 %s 48 9\ngray8 %s 48 10\n' "$TMP/ties/1.png" "$TMP/ties/2.png" |
+  /usr/bin/python3 tests/make_png.py -
+"$LSM" reconstruct "$TMP/ties" -o "$TMP/out-ties" --spacing 2 --method blend --no-preview -q
+ties=$(od -An -v -tf4 -j $((512 + 48 * 48 * 4)) -N $((48 * 48 * 4)) "$TMP/out-ties/volume.nrrd" |
+  awk '{ for (i = 1; i <= NF; i++) { if ($i + 0 == 0) z++; if ($i + 0 < 0) n++ } } END { print z + 0, n + 0 }')
+"$LSM" reconstruct "$TMP/ties" -o "$TMP/out-ties-mask" --spacing 2 --method blend --values mask \
+  --no-preview -q
+masked=$(od -An -v -tu1 -j $((512 + 48 * 48)) -N $((48 * 48)) "$TMP/out-ties-mask/volume.nrrd" |
+  awk '{ for (i = 1; i <= NF; i++) if ($i == 255) n++ } END { print n + 0 }')
+check "blend of discs r 9 and 10 at mid-gap: no sample exactly 0, and phi < 0 is the mask's inside (got zeros, inside: $ties; mask $masked)" \
+  [ "$ties" = "0 $masked" ]
+
 # label masks stored as 0/1: read as non-zero foreground (with a note), the
 # same volume as the 0/255 version of the same discs
 mkdir -p "$TMP/lab01" "$TMP/lab255"

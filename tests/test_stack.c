@@ -249,6 +249,10 @@ static void check_exact_input(const run *r, size_t out_index, size_t input_index
   assert_int_equal(o->input_index, (long)input_index);
   float *want = input_phi(&r->src, input_index);
   const int n = r->src.width * r->src.height;
+  /* an outline pixel lies on the contour (phi = 0): written a millionth of
+   * a pixel below zero, as every tie on the surface (pixel size 1 here) */
+  for (int k = 0; k < n; ++k)
+    if (want[k] == 0.0f) want[k] = -1e-6f;
   for (int k = 0; k < n; ++k)
     if (o->phi[k] != want[k])
       fail_msg("output slice %zu (z = %g) differs from input %zu at pixel %d: %.9g vs %.9g",
