@@ -129,7 +129,8 @@ if [ $rc -eq 0 ]; then
   # outlines: phi is exactly 0 on the contour pixels, which are inside
   "$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olmask" --input outline --spacing 8 --values mask \
     --format raw --no-preview -q >"$TMP/log" 2>&1
-  check "outline --values mask exits 0 ($(head -c 300 "$TMP/log"))" [ $? -eq 0 ]
+  rc=$?
+  check "outline --values mask exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
   mask_matches_slices "$TMP/olmask"
 fi
 

@@ -78,7 +78,8 @@ check "no platform: --backend opencl exits 1 (got $rc)" [ $rc -eq 1 ]
 check "no platform: the message says so (got: $(cat "$TMP/e"))" grep -q 'OpenCL: no platform found' "$TMP/e"
 OCL_ICD_VENDORS="$TMP/no-icd" "$LSM" reconstruct "$SET" -o "$TMP/noplat-auto" --backend auto -q \
   --heights "$SET/heights.txt" --dz 10 --no-preview >"$TMP/o" 2>"$TMP/e"
-check "no platform: --backend auto exits 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+rc=$?
+check "no platform: --backend auto exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "no platform: --backend auto ran on C" grep -q '"backend": {"name": "c"' "$TMP/noplat-auto/run.json"
 
 # ---- C against OpenCL, voxel by voxel ------------------------------------------------------
@@ -161,7 +162,8 @@ fi
 compare candlestick-1e20 "$SET" --spacing 40e20 --pixel-size 1e20 --dz 10e20
 "$LSM" reconstruct "$SET" -o "$TMP/blend" --backend opencl --method blend \
   --heights "$SET/heights.txt" --dz 10 -q >"$TMP/o" 2>"$TMP/e"
-check "--method blend --backend opencl (host path) exits 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+rc=$?
+check "--method blend --backend opencl (host path) exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 
 compare candlestick-rk2-track "$SET" --scheme upwind --time rk2 --per-iteration --tol 2
 # A --tol so fine that CP's last bits decide the stopping step: four pixels into a wedge, where the
