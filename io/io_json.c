@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* The length of the well-formed UTF-8 sequence at p (1 to 4), or 0 when the
  * byte at p does not start one (a stray continuation byte, an overlong or
@@ -57,4 +58,173 @@ void lsm_json_number(FILE *f, double v) {
   char text[40];
   lsm_shortest_number(text, sizeof text, v);
   fputs(text, f);
+}
+
+/* ---- reading: one number by its member path ---------------------------------------------- */
+
+typedef struct json_reader {
+  const char *p;           /* the next byte */
+  const char *const *keys; /* the member path sought */
+  int count;
+  int found;
+  double value;
+} json_reader;
+
+enum { JSON_MAX_DEPTH = 256 };
+
+static void json_space(json_reader *r) {
+  while (*r->p == ' ' || *r->p == '\t' || *r->p == '\n' || *r->p == '\r') r->p++;
+}
+
+static int is_hex(char c) {
+  return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F');
+}
+
+/* A string; *raw / *len: its bytes between the quotes, escapes unresolved. */
+static int json_read_string(json_reader *r, const char **raw, size_t *len) {
+  if (*r->p != '"') return 0;
+  const char *start = ++r->p;
+  for (;;) {
+    const unsigned char c = (unsigned char)*r->p;
+    if (c == '"') break;
+    if (c < 0x20) return 0; /* a control character, or the end of the text */
+    if (c == '\\') {
+      const char e = r->p[1];
+      if (e == 'u') {
+        for (int k = 2; k < 6; ++k)
+          if (!is_hex(r->p[k])) return 0;
+        r->p += 6;
+        continue;
+      }
+      if (!e || !strchr("\"\\/bfnrt", e)) return 0;
+      r->p += 2;
+      continue;
+    }
+    r->p++;
+  }
+  *raw = start;
+  *len = (size_t)(r->p - start);
+  r->p++;
+  return 1;
+}
+
+static int json_digits(json_reader *r) {
+  if (*r->p < '0' || *r->p > '9') return 0;
+  while (*r->p >= '0' && *r->p <= '9') r->p++;
+  return 1;
+}
+
+/* A number by the JSON grammar: -? (0 | [1-9][0-9]*) (. [0-9]+)? ([eE] [+-]? [0-9]+)? */
+static int json_read_number(json_reader *r, double *v) {
+  const char *start = r->p;
+  if (*r->p == '-') r->p++;
+  if (*r->p == '0') r->p++;
+  else if (!json_digits(r)) return 0;
+  if (*r->p == '.') {
+    r->p++;
+    if (!json_digits(r)) return 0;
+  }
+  if (*r->p == 'e' || *r->p == 'E') {
+    r->p++;
+    if (*r->p == '+' || *r->p == '-') r->p++;
+    if (!json_digits(r)) return 0;
+  }
+  *v = strtod(start, NULL);
+  return 1;
+}
+
+static int json_literal(json_reader *r, const char *word) {
+  const size_t n = strlen(word);
+  if (strncmp(r->p, word, n) != 0) return 0;
+  r->p += n;
+  return 1;
+}
+
+/* One value at nesting level `level`; on_path: the members that led here are
+ * keys[0 .. level - 1]. */
+static int json_read_value(json_reader *r, int level, int on_path) {
+  if (level > JSON_MAX_DEPTH) return 0;
+  json_space(r);
+  const char c = *r->p;
+  if (c == '{') {
+    r->p++;
+    json_space(r);
+    if (*r->p == '}') {
+      r->p++;
+      return 1;
+    }
+    for (;;) {
+      const char *key;
+      size_t len;
+      json_space(r);
+      if (!json_read_string(r, &key, &len)) return 0;
+      json_space(r);
+      if (*r->p != ':') return 0;
+      r->p++;
+      const int match = on_path && level < r->count && strlen(r->keys[level]) == len &&
+                        memcmp(r->keys[level], key, len) == 0;
+      json_space(r);
+      double v;
+      if (match && level + 1 == r->count && (*r->p == '-' || (*r->p >= '0' && *r->p <= '9'))) {
+        if (!json_read_number(r, &v)) return 0;
+        r->found = 1;
+        r->value = v;
+      } else if (!json_read_value(r, level + 1, match)) {
+        return 0;
+      }
+      json_space(r);
+      if (*r->p == ',') {
+        r->p++;
+        continue;
+      }
+      if (*r->p != '}') return 0;
+      r->p++;
+      return 1;
+    }
+  }
+  if (c == '[') {
+    r->p++;
+    json_space(r);
+    if (*r->p == ']') {
+      r->p++;
+      return 1;
+    }
+    for (;;) {
+      if (!json_read_value(r, level + 1, 0)) return 0;
+      json_space(r);
+      if (*r->p == ',') {
+        r->p++;
+        continue;
+      }
+      if (*r->p != ']') return 0;
+      r->p++;
+      return 1;
+    }
+  }
+  if (c == '"') {
+    const char *raw;
+    size_t len;
+    return json_read_string(r, &raw, &len);
+  }
+  if (c == 't') return json_literal(r, "true");
+  if (c == 'f') return json_literal(r, "false");
+  if (c == 'n') return json_literal(r, "null");
+  double v;
+  return json_read_number(r, &v);
+}
+
+int lsm_json_find_number(const char *text, const char *const *keys, int count, double *value,
+                         size_t *error_at) {
+  json_reader r = {text, keys, count, 0, 0.0};
+  int ok = json_read_value(&r, 0, 1);
+  if (ok) {
+    json_space(&r);
+    ok = *r.p == '\0';
+  }
+  if (!ok) {
+    if (error_at) *error_at = (size_t)(r.p - text);
+    return -1;
+  }
+  if (r.found && value) *value = r.value;
+  return r.found;
 }

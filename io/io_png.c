@@ -109,14 +109,16 @@ static uint32_t sample_at(png_const_bytep p, int wide) {
 }
 
 /* One row of 8- or 16-bit G, GA, RGB or RGBA samples to 0/1.  Foreground when
- * luminance*alpha/maxval >= (maxval+1)/2 (or > 0 with nonzero), computed
- * exactly in integers with Rec. 709 weights scaled by 10000. */
+ * luminance*alpha/maxval >= maxval/2, 50 % of full scale (or > 0 with
+ * nonzero), computed exactly in integers with Rec. 709 weights scaled by
+ * 10000.  (For plain gray samples that is 128 of 255; an RGB or composited
+ * luminance of 127.9 is past it too.) */
 static void convert_row(png_const_bytep row, png_uint_32 width, int channels, int depth,
                         int invert, int nonzero, uint8_t *out) {
   const int wide = depth == 16;
   const size_t step = (size_t)(wide ? 2 : 1);
   const uint64_t maxval = wide ? 65535u : 255u;
-  const uint64_t limit = (maxval + 1u) * 10000u * maxval;
+  const uint64_t limit = 10000u * maxval * maxval;
   const int has_alpha = channels == 2 || channels == 4;
   for (png_uint_32 x = 0; x < width; ++x) {
     png_const_bytep p = row + (size_t)x * (size_t)channels * step;

@@ -212,6 +212,16 @@ void lsm_json_number(FILE *f, double v);
 /* The shortest of %.15g, %.16g, %.17g that reads back as v ("50", "0.1"). */
 void lsm_shortest_number(char *text, size_t size, double v);
 
+/* Reads a number from a JSON document (text, NUL-terminated) by its member
+ * path: keys[0] of the top-level object, keys[1] of that member's object,
+ * and so on (count keys; a later duplicate wins).  The whole document is
+ * checked against the JSON grammar (nesting up to 256 levels), so any
+ * formatting reads alike.  Returns 1 and *value when the member is there and
+ * a number, 0 when the document is valid but has no such number, -1 when it
+ * is not valid JSON (*error_at: the byte offset where it stops being so). */
+int lsm_json_find_number(const char *text, const char *const *keys, int count, double *value,
+                         size_t *error_at);
+
 /* Writes the JSON sidecar of a raw volume (sizes, spacing, origin, dtype,
  * endianness, data file name). */
 lsm_status lsm_raw_write_json(const char *path, const char *data_file,

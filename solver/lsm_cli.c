@@ -209,9 +209,11 @@ static const char score_help[] =
     "A score that is undefined is null: the distances where no slice has a boundary,\n"
     "the volume error where the truth is empty.\n"
     "A result that does not fit TRUTH_DIR and K is refused: its slice count must be\n"
-    "the one --spacing K gives, its run.json must count the kept slices, and every\n"
-    "kept slice must come back exactly.  (Slices written by another tool, with no\n"
-    "run.json, are scored without the check of run.json's kept-slice count.)\n";
+    "the one --spacing K gives, its run.json must count the kept slices\n"
+    "(input.slices), and every kept slice must come back exactly.  (Slices written\n"
+    "by another tool, with no run.json, are scored without the check of run.json's\n"
+    "kept-slice count.)  Truth stored as 0/1 label masks is read as reconstruct\n"
+    "reads them, the rule decided over the kept slices.\n";
 
 static const char devices_help[] =
     "Usage: lsmorph devices\n"

@@ -1074,26 +1074,31 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
 
 /* ---- score ------------------------------------------------------------------------------ */
 
-/* The number of input slices a result was made from, from its run.json; 0
- * when it has none (slices written by another tool, such as a reference).  A
- * run.json that does not say is an error: the result is damaged. */
+/* The number of input slices a result was made from, from its run.json
+ * (input.slices); 0 when it has none (slices written by another tool, such
+ * as a reference).  A run.json that does not say is an error: the result is
+ * damaged.  Read as JSON, so a run.json saved again by another tool (other
+ * spacing, other member order) reads alike. */
 static lsm_status result_input_count(const char *result_dir, size_t *count, lsm_err *err) {
   char path[4200];
   snprintf(path, sizeof path, "%s/run.json", result_dir);
   *count = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f && errno == ENOENT) return LSM_OK;
-  if (!f) return lsm_fail(err, LSM_ERR_IO, path, "cannot open: %s", strerror(errno));
-  char head[1 << 16]; /* the input object comes before the per-pair list */
-  const size_t len = fread(head, 1, sizeof head - 1, f);
-  fclose(f);
-  head[len] = '\0';
-  const char *input = strstr(head, "\"input\": {\"folder\": ");
-  const char *slices = input ? strstr(input, "\"slices\": ") : NULL;
-  char *end = NULL;
-  const unsigned long long n =
-      slices ? strtoull(slices + strlen("\"slices\": "), &end, 10) : 0;
-  if (!slices || !end || (*end != ',' && *end != '}') || n == 0)
+  struct stat info;
+  if (stat(path, &info) != 0 && errno == ENOENT) return LSM_OK;
+  char *text = NULL;
+  size_t len = 0;
+  LSM_TRY(lsm_read_file(path, (size_t)1 << 30, &text, &len, err)); /* far above any run.json */
+  static const char *const keys[] = {"input", "slices"};
+  double n = 0.0;
+  size_t at = 0;
+  const size_t text_len = strlen(text); /* a NUL byte is not JSON */
+  const int found = text_len != len ? -1 : lsm_json_find_number(text, keys, 2, &n, &at);
+  if (text_len != len) at = text_len;
+  free(text);
+  if (found < 0)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "not valid JSON (at byte %zu): the result is damaged",
+                    at);
+  if (found == 0 || !(n >= 1.0 && n <= 1e15 && n == floor(n)))
     return lsm_fail(err, LSM_ERR_INPUT, path,
                     "does not say how many input slices the result was made from (input.slices)");
   *count = (size_t)n;
@@ -1121,9 +1126,19 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
   double *pool = NULL;
-  /* truth stored as 0/1 labels is read as such (the result slices are 0/255) */
-  lsm_status st = pick_foreground(truth, n, &ro_truth, 1, cli->truth_dir, err);
   const size_t last_input = (n - 1) / (size_t)cli->stride * (size_t)cli->stride;
+  /* truth stored as 0/1 labels is read as such (the result slices are
+   * 0/255), decided as reconstruct decided it: over the kept slices alone
+   * (one bright pixel in a held-out slice must not change how they read) */
+  lsm_status st = LSM_OK;
+  char **kept = lsm_alloc(last_input / (size_t)cli->stride + 1, sizeof *kept, err, "slice list");
+  if (!kept) st = err ? err->status : LSM_ERR_NOMEM;
+  if (st == LSM_OK) {
+    size_t n_kept = 0;
+    for (size_t k = 0; k <= last_input; k += (size_t)cli->stride) kept[n_kept++] = truth[k];
+    st = pick_foreground(kept, n_kept, &ro_truth, 1, cli->truth_dir, err);
+  }
+  free(kept);
   if (st == LSM_OK) {
     /* a result of another stride or stack would be scored against the wrong
      * slices: its slice count must be the one this truth and stride give */

@@ -11,6 +11,7 @@ SIZE x SIZE dark background, default SIZE 32; SIZE may also be WxH):
   gray8 gray16 gray1 graya8 rgb8 rgb16 rgba8 rgba16 palette palette_trns
   interlaced (8-bit gray, Adam7)  empty (8-bit gray, all dark)
   label01 (8-bit gray, the disc stored as label value 1 on 0)
+  label01_speck (label01 with its top-left pixel at 255)
   labels (8-bit gray, a label map: the disc's left part label 1, its right third 200)
   text_chunks (8-bit gray with tEXt, zTXt and iTXt chunks before IDAT)
 Bad ones:
@@ -101,7 +102,7 @@ def row_bytes(kind, row):
 
 HEADER = {  # kind: (bit depth, colour type)
     "gray8": (8, 0), "interlaced": (8, 0), "empty": (8, 0), "label01": (8, 0), "gray16": (16, 0),
-    "labels": (8, 0),
+    "labels": (8, 0), "label01_speck": (8, 0),
     "gray1": (1, 0),
     "graya8": (8, 4), "rgb8": (8, 2), "rgb16": (16, 2), "rgba8": (8, 6), "rgba16": (16, 6),
     "palette": (8, 3), "palette_trns": (8, 3), "palette2": (2, 3),
@@ -128,6 +129,9 @@ def good(kind, size, radius):
     depth, color = HEADER[kind]
     if kind == "interlaced":
         raw = adam7(rows, kind)
+    elif kind == "label01_speck":
+        raw = b"".join(b"\x00" + bytes([255 if x == 0 and y == 0 else 1 if v else 0
+                                         for x, v in enumerate(r)]) for y, r in enumerate(rows))
     elif kind == "labels":
         raw = b"".join(b"\x00" + bytes([(200 if x > w / 2 + radius / 3 else 1) if v else 0
                                          for x, v in enumerate(r)]) for r in rows)

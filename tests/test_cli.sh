@@ -476,6 +476,19 @@ check "0/1 label masks: exit 0" [ $? -eq 0 ]
 check "0/1 label masks: a note says non-zero pixels are foreground" grep -q "non-zero pixels as foreground" "$TMP/lab.err"
 "$LSM" reconstruct "$TMP/lab255" -o "$TMP/out-lab255" --spacing 4 --no-preview -q
 check "0/1 label masks: same volume as 0/255 masks" cmp -s "$TMP/out-lab01/volume.nrrd" "$TMP/out-lab255/volume.nrrd"
+# score reads 0/1 label truth as reconstruct read the kept slices: decided
+# over the kept ones, so a bright pixel in a held-out slice changes nothing
+mkdir -p "$TMP/labtruth" "$TMP/labkept"
+printf 'label01 %s 32 5\nlabel01_speck %s 32 6\nlabel01 %s 32 7\nlabel01 %s 32 8\nlabel01 %s 32 9\n' \
+  "$TMP/labtruth/1.png" "$TMP/labtruth/2.png" "$TMP/labtruth/3.png" "$TMP/labtruth/4.png" \
+  "$TMP/labtruth/5.png" | /usr/bin/python3 tests/make_png.py -
+cp "$TMP/labtruth/1.png" "$TMP/labtruth/3.png" "$TMP/labtruth/5.png" "$TMP/labkept/"
+"$LSM" reconstruct "$TMP/labkept" -o "$TMP/out-labkept" --spacing 2 --no-preview -q
+"$LSM" score "$TMP/labtruth" "$TMP/out-labkept" --stride 2 >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "score of 0/1 label truth with a bright pixel held out: exit 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "score of 0/1 label truth with a bright pixel held out: Dice above 0.9 ($(cat "$TMP/o"))" \
+  awk -F'"dice_volume": ' '{ split($2, v, ","); exit !(v[1] > 0.9) }' "$TMP/o"
 # a label map (labels 1 and 200): the dark label reads as background, and a note says so;
 # a drawn mask (0/255 with no dark grey) gets no such note
 mkdir -p "$TMP/labmap"

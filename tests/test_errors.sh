@@ -259,10 +259,26 @@ cp -r r4 r4-bare && rm r4-bare/run.json # without run.json the inputs still tell
 expect "score: stride 2 on a stride-4 result without run.json" 1 \
   "r4-bare/slices/00003.png: differs from the truth slice tall/3.png, which --stride 2 makes an input" - \
   score tall r4-bare --stride 2
-cp -r r4 r4-damaged && printf '{' >r4-damaged/run.json # a run.json that does not count: damaged
-expect "score: a run.json without the input count" 1 \
-  "r4-damaged/run.json: does not say how many input slices the result was made from" - \
+cp -r r4 r4-damaged && printf '{' >r4-damaged/run.json # a run.json cut short: damaged
+expect "score: a run.json that is not JSON" 1 \
+  "r4-damaged/run.json: not valid JSON (at byte 1): the result is damaged" - \
   score tall r4-damaged --stride 4
+cp -r r4 r4-uncounted && printf '{"input": {"folder": "tall4"}, "slices": 3}\n' >r4-uncounted/run.json
+expect "score: a run.json without the input count" 1 \
+  "r4-uncounted/run.json: does not say how many input slices the result was made from" - \
+  score tall r4-uncounted --stride 4
+# run.json is read as JSON: saved again by another tool (indented, members
+# reordered, the input count last) it still tells the stride
+cp -r r4 r4-resaved && /usr/bin/python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["input"]["slices"] = d["input"].pop("slices")
+json.dump(dict(reversed(list(d.items()))), open(sys.argv[1], "w"), indent=2)' r4-resaved/run.json
+expect "score: a re-saved run.json still tells a stride-4 result from stride 2" 1 \
+  "r4-resaved: was made from 3 slices (run.json), but --stride 2 keeps 5 of the 9 truth slices" - \
+  score tall r4-resaved --stride 2
+"$LSM" score tall r4-resaved --stride 4 >/dev/null 2>"$TMP/stderr"
+if [ $? -eq 0 ]; then ok; else bad "score of a re-saved run.json: $(cat "$TMP/stderr")"; fi
 expect "score: stride 3 on a stride-2 result" 1 \
   "r2/slices: 9 slices, but slices 1, 4, 7, ... of the 9 truth slices, reconstructed with --spacing 3" - \
   score tall r2 --stride 3

@@ -459,16 +459,18 @@ static void test_png_rgb(void **state) {
       0,   255, 0,   /* green 0.7152: 1 */
       255, 0,   0,   /* red 0.2126: 0 */
       0,   0,   255, /* blue 0.0722: 0 */
-      128, 128, 128, /* exactly the threshold: 1 */
+      128, 128, 128, /* 128 >= 127.5 (50 %): 1 */
       127, 127, 127, /* just below: 0 */
       255, 255, 0,   /* yellow 0.9278: 1 */
       255, 0,   255, /* magenta 0.2848: 0 */
       0,   180, 0,   /* 0.7152*180 = 128.7: 1 */
       0,   178, 0,   /* 0.7152*178 = 127.3: 0 */
       0,   255, 255, /* cyan 0.7874: 1 */
+      128, 128, 127, /* 127.93, 50.17 %: 1 (the threshold is 50 %, not 128/255) */
+      127, 127, 128, /* 127.07: 0 */
   };
-  const uint8_t want[] = {1, 0, 1, 0, 0, 1, 0, 1, 0, 1, 0, 1};
-  test_png t = {.width = 4, .height = 3, .depth = 8, .color_type = PNG_COLOR_TYPE_RGB, .samples = s};
+  const uint8_t want[] = {1, 0, 1, 0, 0, 1, 0, 1, 0, 1, 0, 1, 1, 0};
+  test_png t = {.width = 7, .height = 2, .depth = 8, .color_type = PNG_COLOR_TYPE_RGB, .samples = s};
   check_png(f->dir, "rgb8.png", &t, 0, want);
 
   const unsigned s16[] = {32768, 32768, 32768, 32767, 32767, 32767, 0, 65535, 0, 65535, 0, 0};
@@ -486,11 +488,13 @@ static void test_png_rgba(void **state) {
       255, 255, 255, 127, /* 127 -> background */
       0,   0,   0,   255, /* opaque black */
       0,   0,   0,   0,   /* transparent black */
+      200, 200, 200, 163, /* 200 * 163 / 255 = 127.84, 50.13 %: foreground */
+      200, 200, 200, 162, /* 127.06: background */
   };
-  const uint8_t want[] = {0, 1, 1, 0, 0, 0};
-  test_png t = {.width = 3, .height = 2, .depth = 8, .color_type = PNG_COLOR_TYPE_RGB_ALPHA, .samples = s};
+  const uint8_t want[] = {0, 1, 1, 0, 0, 0, 1, 0};
+  test_png t = {.width = 4, .height = 2, .depth = 8, .color_type = PNG_COLOR_TYPE_RGB_ALPHA, .samples = s};
   check_png(f->dir, "rgba8.png", &t, 0, want);
-  const uint8_t inv[] = {1, 0, 0, 1, 1, 1};
+  const uint8_t inv[] = {1, 0, 0, 1, 1, 1, 0, 1};
   check_png(f->dir, "rgba8i.png", &t, 1, inv);
 
   const unsigned s16[] = {65535, 65535, 65535, 0, 65535, 65535, 65535, 32768,
@@ -1070,9 +1074,63 @@ static void test_nrrd_errors(void **state) {
   }
 }
 
+/* lsm_json_find_number: a member path through any valid formatting; invalid
+ * JSON is refused wherever it breaks, not only on the way to the member. */
+static void test_json_find_number(void **state) {
+  (void)state;
+  static const char *const path[] = {"input", "slices"};
+  double v = 0.0;
+  size_t at = 0;
+  assert_int_equal(lsm_json_find_number("{\"input\": {\"folder\": \"a\", \"slices\": 15}}", path, 2, &v, &at), 1);
+  assert_true(v == 15.0);
+  /* indented, reordered, with arrays, escapes and literals around it */
+  const char *pretty =
+      "{\n  \"pairs\": [ {\"slices\": 7}, [1, 2.5e-3, -0, true, false, null] ],\n"
+      "  \"name\": \"a \\\"quoted\\\" \\u00e9 \\\\ name\",\n"
+      "  \"input\": {\n    \"slices\": 3E+1\n  }\n}\n";
+  assert_int_equal(lsm_json_find_number(pretty, path, 2, &v, &at), 1);
+  assert_true(v == 30.0);
+  /* a later duplicate wins; the key must match whole and at its level */
+  assert_int_equal(lsm_json_find_number("{\"input\":{\"slices\":1,\"slices\":2}}", path, 2, &v, &at), 1);
+  assert_true(v == 2.0);
+  assert_int_equal(lsm_json_find_number("{\"input\":{\"slice\":1},\"slices\":4}", path, 2, &v, &at), 0);
+  assert_int_equal(lsm_json_find_number("{\"x\":{\"input\":{\"slices\":4}}}", path, 2, &v, &at), 0);
+  assert_int_equal(lsm_json_find_number("{\"input\":{\"slices\":\"4\"}}", path, 2, &v, &at), 0);
+  assert_int_equal(lsm_json_find_number("[1, {\"input\":{\"slices\":4}}]", path, 2, &v, &at), 0);
+  /* invalid: where it breaks */
+  static const struct { const char *text; size_t at; } bad[] = {
+      {"{", 1},
+      {"{\"input\": {\"slices\": 3}", 23},
+      {"{\"input\": {\"slices\": 3},}", 24},
+      {"{\"input\": {\"slices\": 03}}", 22},
+      {"{\"input\": {\"slices\": 3.}}", 23},
+      {"{\"input\": {\"slices\": 3}} x", 25},
+      {"{\"a\": tru}", 6},
+      {"{\"a\": \"\\x\"}", 7},
+      {"{\"a\": \"\\u12g4\"}", 7},
+      {"{\"a\": \"line\nbreak\"}", 11},
+      {"", 0},
+  };
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+    at = 999;
+    assert_int_equal(lsm_json_find_number(bad[k].text, path, 2, &v, &at), -1);
+    assert_int_equal(at, bad[k].at);
+  }
+  /* nesting: 256 levels read, 300 refused (no stack overflow on deeper) */
+  char deep[1000];
+  for (int depth = 256; depth <= 300; depth += 44) {
+    size_t n = 0;
+    for (int k = 0; k < depth; ++k) deep[n++] = '[';
+    for (int k = 0; k < depth; ++k) deep[n++] = ']';
+    deep[n] = '\0';
+    assert_int_equal(lsm_json_find_number(deep, path, 2, &v, &at), depth <= 256 ? 0 : -1);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_natural_cmp),
+      cmocka_unit_test(test_json_find_number),
       cmocka_unit_test(test_heights_good),
       cmocka_unit_test(test_heights_bad),
       cmocka_unit_test_setup_teardown(test_heights_read, setup_tmp, teardown_tmp),
