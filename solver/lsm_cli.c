@@ -16,7 +16,7 @@ static const char general_help[] =
     "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
     "  lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
     "  lsmorph devices\n"
-    "  lsmorph --help | --version | help reconstruct|score|devices\n"
+    "  lsmorph --help [COMMAND] | --version | help reconstruct|score|devices\n"
     "\n"
     "Commands:\n"
     "  reconstruct   read PNG slices, morph between consecutive slices, write a volume\n"
@@ -570,22 +570,23 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   if (argc < 2) return lsm_fail(err, LSM_ERR_USAGE, NULL, "no command (see 'lsmorph --help')");
   const char *cmd = argv[1];
   arg_cursor c = {argc, 2, argv};
-  if (strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0) {
-    cli->command = LSM_CMD_HELP;
-    return LSM_OK;
-  }
-  if (strcmp(cmd, "help") == 0) {
+  /* help [COMMAND], and --help [COMMAND] the same */
+  if (strcmp(cmd, "help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0) {
     cli->command = LSM_CMD_HELP;
     cli->help_topic = argc > 2 ? argv[2] : NULL;
     if (cli->help_topic && strcmp(cli->help_topic, "reconstruct") != 0 &&
         strcmp(cli->help_topic, "score") != 0 && strcmp(cli->help_topic, "devices") != 0)
       return lsm_fail(err, LSM_ERR_USAGE, NULL,
-                      "help: no command '%s' (help reconstruct, help score, help devices)",
+                      "%s: no command '%s' (help reconstruct, help score, help devices)", cmd,
                       cli->help_topic);
+    if (argc > 3)
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes one command at most, not '%s'", cmd,
+                      argv[3]);
     return LSM_OK;
   }
   if (strcmp(cmd, "-V") == 0 || strcmp(cmd, "--version") == 0) {
     cli->command = LSM_CMD_VERSION;
+    if (argc > 2) return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes no arguments", cmd);
     return LSM_OK;
   }
   if (strcmp(cmd, "reconstruct") == 0) {

@@ -30,6 +30,9 @@ case $out in *reconstruct*) ok ;; *) bad "--help does not mention reconstruct" ;
 out=$("$LSM" help reconstruct 2>&1)
 check "help reconstruct exits 0" [ $? -eq 0 ]
 case $out in *--heights*) ok ;; *) bad "help reconstruct does not list --heights" ;; esac
+out=$("$LSM" --help score 2>&1)
+check "--help score exits 0" [ $? -eq 0 ]
+case $out in "Usage: lsmorph score"*) ok ;; *) bad "--help score is not score's help: '$(printf '%s' "$out" | head -1)'" ;; esac
 out=$("$LSM" --version 2>&1)
 check "--version exits 0" [ $? -eq 0 ]
 case $out in "lsmorph "[0-9]*.[0-9]*) ok ;; *) bad "--version printed '$out'" ;; esac

@@ -228,6 +228,10 @@ expect "option without its value" 2 "-o needs a value" - reconstruct good -o
 expect "missing -o" 2 "missing -o OUT_DIR" - reconstruct good
 expect "unknown command" 2 "unknown command 'rebuild'" - rebuild good -o out
 expect "help on no command" 2 "help: no command 'bogus'" - help bogus
+expect "--help on no command" 2 "--help: no command 'bogus'" - --help bogus
+expect "help with two commands" 2 "help takes one command at most, not 'score'" - help reconstruct score
+expect "--version with an argument" 2 "--version takes no arguments" - --version reconstruct
+expect "devices with an argument" 2 "devices takes no arguments" - devices 0
 expect "empty -o" 2 "-o: the output folder name is empty" - reconstruct good -o ""
 # filled discs given as outlines: run, but a note says they look filled
 "$LSM" reconstruct good -o out-outline --input outline --no-preview >/dev/null 2>"$TMP/stderr"
