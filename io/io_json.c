@@ -115,8 +115,7 @@ static int json_digits(json_reader *r) {
 }
 
 /* A number by the JSON grammar: -? (0 | [1-9][0-9]*) (. [0-9]+)? ([eE] [+-]? [0-9]+)? */
-static int json_read_number(json_reader *r, double *v) {
-  const char *start = r->p;
+static int json_read_number(json_reader *r) {
   if (*r->p == '-') r->p++;
   if (*r->p == '0') r->p++;
   else if (!json_digits(r)) return 0;
@@ -129,7 +128,6 @@ static int json_read_number(json_reader *r, double *v) {
     if (*r->p == '+' || *r->p == '-') r->p++;
     if (!json_digits(r)) return 0;
   }
-  *v = strtod(start, NULL);
   return 1;
 }
 
@@ -146,57 +144,40 @@ static int json_read_value(json_reader *r, int level, int on_path) {
   if (level > JSON_MAX_DEPTH) return 0;
   json_space(r);
   const char c = *r->p;
-  if (c == '{') {
+  if (c == '{' || c == '[') { /* an object's members, an array's elements */
+    const char close = c == '{' ? '}' : ']';
     r->p++;
     json_space(r);
-    if (*r->p == '}') {
+    if (*r->p == close) {
       r->p++;
       return 1;
     }
     for (;;) {
-      const char *key;
-      size_t len;
-      json_space(r);
-      if (!json_read_string(r, &key, &len)) return 0;
-      json_space(r);
-      if (*r->p != ':') return 0;
-      r->p++;
-      const int match = on_path && level < r->count && strlen(r->keys[level]) == len &&
-                        memcmp(r->keys[level], key, len) == 0;
-      json_space(r);
-      double v;
-      if (match && level + 1 == r->count && (*r->p == '-' || (*r->p >= '0' && *r->p <= '9'))) {
-        if (!json_read_number(r, &v)) return 0;
-        r->found = 1;
-        r->value = v;
-      } else if (!json_read_value(r, level + 1, match)) {
-        return 0;
+      int match = 0; /* a member on the path sought */
+      if (c == '{') {
+        const char *key;
+        size_t len;
+        json_space(r);
+        if (!json_read_string(r, &key, &len)) return 0;
+        json_space(r);
+        if (*r->p != ':') return 0;
+        r->p++;
+        match = on_path && level < r->count && strlen(r->keys[level]) == len &&
+                memcmp(r->keys[level], key, len) == 0;
+        json_space(r);
+      }
+      const char *value = r->p;
+      if (!json_read_value(r, level + 1, match)) return 0;
+      if (match && level + 1 == r->count && (*value == '-' || (*value >= '0' && *value <= '9'))) {
+        r->found = 1; /* the number sought, read by the grammar above */
+        r->value = strtod(value, NULL);
       }
       json_space(r);
       if (*r->p == ',') {
         r->p++;
         continue;
       }
-      if (*r->p != '}') return 0;
-      r->p++;
-      return 1;
-    }
-  }
-  if (c == '[') {
-    r->p++;
-    json_space(r);
-    if (*r->p == ']') {
-      r->p++;
-      return 1;
-    }
-    for (;;) {
-      if (!json_read_value(r, level + 1, 0)) return 0;
-      json_space(r);
-      if (*r->p == ',') {
-        r->p++;
-        continue;
-      }
-      if (*r->p != ']') return 0;
+      if (*r->p != close) return 0;
       r->p++;
       return 1;
     }
@@ -209,8 +190,7 @@ static int json_read_value(json_reader *r, int level, int on_path) {
   if (c == 't') return json_literal(r, "true");
   if (c == 'f') return json_literal(r, "false");
   if (c == 'n') return json_literal(r, "null");
-  double v;
-  return json_read_number(r, &v);
+  return json_read_number(r);
 }
 
 int lsm_json_find_number(const char *text, const char *const *keys, int count, double *value,
