@@ -537,6 +537,7 @@ enum {
   K_GHOSTS,
   K_UPWIND,
   K_ROEFIX,
+  K_WENO5,
   K_CFL,
   K_RESIDUAL,
   K_REINIT,
@@ -548,7 +549,7 @@ enum {
   K_COUNT
 };
 static const char *const kernel_names[K_COUNT] = {
-    "lsm_fill_ghosts",  "lsm_stage_upwind", "lsm_stage_roefix", "lsm_cfl_partial",
+    "lsm_fill_ghosts",  "lsm_stage_upwind", "lsm_stage_roefix", "lsm_stage_weno5", "lsm_cfl_partial",
     "lsm_residual_partial", "lsm_reinit_step", "lsm_pcl_velocity", "lsm_pcl_advect",
     "lsm_pcl_detect",   "lsm_pcl_apply",    "lsm_pcl_adjust_radius"};
 
@@ -1123,7 +1124,9 @@ static lsm_status stage(cl_state *s, lsm_scheme scheme, cl_mem out, cl_mem u0, c
   LSM_TRY(fill_ghosts(s, in, err));
   if (s->pn > 0) LSM_TRY(pcl_stage(s, in, c0, c1, dt, first, err));
   const float inv_dx = 1.0f / s->dx, inv_dy = 1.0f / s->dy;
-  cl_kernel k = s->k[scheme == LSM_SCHEME_ROEFIX ? K_ROEFIX : K_UPWIND];
+  cl_kernel k = s->k[scheme == LSM_SCHEME_ROEFIX  ? K_ROEFIX
+                     : scheme == LSM_SCHEME_WENO5 ? K_WENO5
+                                                  : K_UPWIND];
   ARG(k, 0, out);
   ARG(k, 1, u0);
   ARG(k, 2, in);

@@ -5,6 +5,7 @@
  *   lsm_fill_ghosts    zero-gradient extension into the ghost ring
  *   lsm_stage_upwind   out = c0 u0 + c1 (in - dt Hhat(in)), Godunov upwind
  *   lsm_stage_roefix   the same with the Roe-Fix Hamiltonian (+-3 widened sets)
+ *   lsm_stage_weno5    the same with fifth-order WENO derivatives (+-3 cells)
  *   lsm_cfl_partial    max of lsm_cfl_rate per work-group
  *   lsm_residual_partial  sum of (phi - phi_target)^2 per work-group
  *   lsm_reinit_step    one Russo–Smereka pseudo-time step
@@ -121,6 +122,21 @@ inline float lsm_cl_roefix(__global const float *u0, __global const float *in,
   return c0 * u0[k] + c1 * (c - dt * H);
 }
 
+/* The 7-cell row and column through the cell, as stage_weno5 loads them. */
+inline float lsm_cl_weno5(__global const float *u0, __global const float *in,
+                          __global const float *target, int k, int stride, float inv_dx,
+                          float inv_dy, float c0, float c1, float dt) {
+  float row[7], col[7];
+#pragma unroll
+  for (int d = 0; d < 7; ++d) {
+    row[d] = in[k + (d - 3)];
+    col[d] = in[k + (d - 3) * stride];
+  }
+  const float c = row[3];
+  const float H = lsm_weno5_hamiltonian(c - target[k], row, col, inv_dx, inv_dy);
+  return c0 * u0[k] + c1 * (c - dt * H);
+}
+
 #define LSM_CL_STAGE_KERNEL(name, cell)                                                    \
   __kernel void name(__global float *out, __global const float *u0,                        \
                      __global const float *in, __global const float *target, int nx, int ny, \
@@ -135,6 +151,7 @@ inline float lsm_cl_roefix(__global const float *u0, __global const float *in,
 
 LSM_CL_STAGE_KERNEL(lsm_stage_upwind, lsm_cl_upwind)
 LSM_CL_STAGE_KERNEL(lsm_stage_roefix, lsm_cl_roefix)
+LSM_CL_STAGE_KERNEL(lsm_stage_weno5, lsm_cl_weno5)
 
 /* ---- reinitialisation: one pseudo-time step, next <- phi (phi, phi0 ghosts filled) ---- */
 inline float lsm_cl_reinit(__global const float *phi, __global const float *phi0, int k,

@@ -97,8 +97,10 @@ static const char reconstruct_help_method[] =
     "  --pls-radius-adjust    pls: reset particle radii after each correction (off)\n"
     "  --seed N               pls: random seed, 0 .. 2^64 - 1 (same seed, same volume,\n"
     "                         any --threads)\n"
-    "  --scheme upwind|roe-fix  numerical Hamiltonian (default upwind: first-order\n"
-    "                         Godunov; roe-fix: Algorithm 3.1 of the design document)\n"
+    "  --scheme upwind|roe-fix|weno5  numerical Hamiltonian (default upwind:\n"
+    "                         first-order Godunov; roe-fix: Algorithm 3.1 of the design\n"
+    "                         document; weno5: fifth-order HJ-WENO derivatives in the\n"
+    "                         Godunov Hamiltonian, with --time rk3, not monotone)\n"
     "  --time euler|rk2|rk3   time integrator (default euler; rk2/rk3: TVD Runge-Kutta)\n"
     "  --cfl C                CFL number, 0 < C (default 0.75)\n"
     "  --reinit-every N       reinitialise phi to a signed distance every N steps\n"
@@ -425,7 +427,7 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     } else if (IS("--scheme")) {
       NEEDS_VALUE();
       if ((so->morph.scheme = lsm_scheme_from_name(v)) == LSM_SCHEME_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--scheme: '%s' is not one of upwind, roe-fix", v);
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--scheme: '%s' is not one of upwind, roe-fix, weno5", v);
     } else if (IS("--time")) {
       NEEDS_VALUE();
       if ((so->morph.time = lsm_time_from_name(v)) == LSM_TIME_UNKNOWN)

@@ -6,7 +6,7 @@
 
 #include "kernels/lsm_cell.h"
 
-static const char *const scheme_names[LSM_SCHEME_COUNT] = {"upwind", "roe-fix"};
+static const char *const scheme_names[LSM_SCHEME_COUNT] = {"upwind", "roe-fix", "weno5"};
 static const char *const time_names[LSM_TIME_COUNT] = {"euler", "rk2", "rk3"};
 
 const char *lsm_scheme_name(lsm_scheme scheme) {
@@ -112,13 +112,43 @@ static void stage_roefix(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
   }
 }
 
+/* The row and the column of seven values through each cell, as the OpenCL
+ * kernel loads them. */
+static void stage_weno5(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
+                        const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {
+  const float inv_dx = 1.0f / in->dx, inv_dy = 1.0f / in->dy;
+  const ptrdiff_t s = in->stride;
+#pragma omp parallel for num_threads(lsm_grid_threads(in, threads)) schedule(static)
+  for (int j = 0; j < in->ny; ++j) {
+    const float *c = &LSM_AT(in, 0, j), *t = &LSM_AT(phi_target, 0, j), *u = &LSM_AT(u0, 0, j);
+    float *o = &LSM_AT(out, 0, j);
+    float row[7], col[7];
+    for (int i = 0; i < in->nx; ++i) {
+      const float *p = c + i;
+      for (int k = 0; k < 7; ++k) {
+        row[k] = p[k - 3];
+        col[k] = p[(k - 3) * s];
+      }
+      const float H = lsm_weno5_hamiltonian(p[0] - t[i], row, col, inv_dx, inv_dy);
+      o[i] = c0 * u[i] + c1 * (p[0] - dt * H);
+    }
+  }
+}
+
 void lsm_scheme_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
                       const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {
   lsm_grid_fill_ghosts(in);
-  if (scheme == LSM_SCHEME_ROEFIX)
+  switch (scheme) {
+  case LSM_SCHEME_ROEFIX:
     stage_roefix(out, u0, in, phi_target, c0, c1, dt, threads);
-  else
+    break;
+  case LSM_SCHEME_WENO5:
+    stage_weno5(out, u0, in, phi_target, c0, c1, dt, threads);
+    break;
+  default:
     stage_upwind(out, u0, in, phi_target, c0, c1, dt, threads);
+    break;
+  }
 }
 
 /* ---- integrators ---------------------------------------------------------------------- */

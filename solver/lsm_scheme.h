@@ -18,6 +18,7 @@ typedef enum lsm_scheme {
   LSM_SCHEME_UNKNOWN = -1,
   LSM_SCHEME_UPWIND,  /* first-order Godunov upwind */
   LSM_SCHEME_ROEFIX,  /* Roe-Fix, Algorithm 3.1 of the design document */
+  LSM_SCHEME_WENO5,   /* fifth-order HJ-WENO derivatives, Godunov Hamiltonian */
   LSM_SCHEME_COUNT
 } lsm_scheme;
 
@@ -39,7 +40,8 @@ int lsm_time_stages(lsm_time time);
 /* The CFL step dt = cfl / max over cells of the scheme's rate (METHOD.md §3.4;
  * kernels/lsm_cell.h, lsm_cfl_rate_of): upwind, |H1|/dx + |H2|/dy on the four
  * one-sided gradient combinations; Roe-Fix, |F| (1/dx + 1/dy), which bounds its
- * Lax–Friedrichs dissipation.  Monotone for cfl <= 1.  Fills phi's ghosts.
+ * Lax–Friedrichs dissipation; WENO5, upwind's.  Monotone for cfl <= 1 (upwind,
+ * Roe-Fix; WENO5 is not monotone).  Fills phi's ghosts.
  * When the rate is 0 everywhere (phi == phi_target) *dt = +INFINITY. */
 void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
                 int threads, double *dt);

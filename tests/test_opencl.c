@@ -1,7 +1,8 @@
 /* The OpenCL backend against the C backend (the reference).
  *
  * For each scheme (upwind, roe-fix) and integrator (euler, rk2, rk3), with
- * and without reinitialisation every 10 steps, a morph state like a real one
+ * and without reinitialisation every 10 steps (weno5 with euler and rk3, and
+ * with rk3 and reinitialisation), a morph state like a real one
  * (disc SDF -> offset ellipse, 96x80 cells, dx = dy = 1) runs 200 steps on
  * both backends through the ops table, as lsm_morph drives it:
  *   max |phi_opencl - phi_c| <= 1e-4 * max(nx, ny) * dx,
@@ -472,6 +473,9 @@ static const morph_case cases[] = {
     CASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK2, 10),   CASE(LSM_SCHEME_ROEFIX, LSM_TIME_RK3, 10),
     /* Unequal spacing and a size that is no multiple of any work-group. */
     {LSM_SCHEME_ROEFIX, LSM_TIME_RK2, 10, 53, 131, 0.5f, 0.75f},
+    CASE(LSM_SCHEME_WENO5, LSM_TIME_EULER, 0),   CASE(LSM_SCHEME_WENO5, LSM_TIME_RK3, 0),
+    CASE(LSM_SCHEME_WENO5, LSM_TIME_RK3, 10),
+    {LSM_SCHEME_WENO5, LSM_TIME_RK3, 10, 53, 131, 0.5f, 0.75f},
 };
 
 #define MORPH(k, name) {name, test_morph_matches_c, NULL, NULL, (void *)&cases[k]}
@@ -727,6 +731,10 @@ int main(void) {
       MORPH(10, "morph roe-fix rk2 reinit"),
       MORPH(11, "morph roe-fix rk3 reinit"),
       MORPH(12, "morph roe-fix rk2 reinit 53x131 dx 0.5 dy 0.75"),
+      MORPH(13, "morph weno5 euler"),
+      MORPH(14, "morph weno5 rk3"),
+      MORPH(15, "morph weno5 rk3 reinit"),
+      MORPH(16, "morph weno5 rk3 reinit 53x131 dx 0.5 dy 0.75"),
       cmocka_unit_test(test_pls_correct_matches_c),
       PLS(0, "pls upwind euler"),
       PLS(1, "pls upwind rk2"),

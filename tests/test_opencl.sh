@@ -147,6 +147,7 @@ compare candlestick-roefix-rk3 "$SET" --heights "$SET/heights.txt" --dz 10 \
 check "the second OpenCL run hit the kernel cache" \
   grep -q '"kernel_cache_hit": true' "$TMP/candlestick-roefix-rk3-opencl/run.json"
 check "one kernel binary in the cache" [ "$(ls "$XDG_CACHE_HOME/lsmorph" | grep -c '\.clbin$')" -eq 1 ]
+compare candlestick-weno5-rk3 "$SET" --heights "$SET/heights.txt" --dz 10 --scheme weno5 --time rk3
 # The particle level set on the device (seeded on the host, stepped and
 # corrected on the device), with and without host reseeding.
 compare candlestick-pls "$SET" --heights "$SET/heights.txt" --dz 10 --method pls

@@ -629,8 +629,8 @@ static void test_cfl_flat_phi(void **state) {
   for (int j = 0; j < 30; ++j)
     for (int i = 0; i < 30; ++i) LSM_AT(phi, i, j) = 1e6f;
   fill_circle(tgt, 0.0, 0.0, 6.0, 1.0);
-  for (int sch = 0; sch < 2; ++sch) {
-    const lsm_scheme scheme = sch ? LSM_SCHEME_ROEFIX : LSM_SCHEME_UPWIND;
+  for (int sch = 0; sch < LSM_SCHEME_COUNT; ++sch) {
+    const lsm_scheme scheme = (lsm_scheme)sch;
     double dt = 0.0;
     lsm_cfl_dt(phi, tgt, scheme, 0.75, 1, &dt);
     if (!isinf(dt)) fail_msg("%s: dt %g on a flat phi", lsm_scheme_name(scheme), dt);
@@ -842,6 +842,162 @@ static void test_circles_roefix(void **state) {
   (void)state;
   check_circle_convergence(LSM_SCHEME_ROEFIX, 20.0, 10.0);
   check_circle_convergence(LSM_SCHEME_ROEFIX, 10.0, 20.0);
+}
+
+/* ------------------------------------------------------------------------ */
+/* fifth-order WENO                                                          */
+
+/* The textbook form (Osher & Fedkiw 2003, eqs. 3.28-3.39), in double:
+ * smoothness indicators with 13/12 and 1/4, eps = 1e-6 max v_k^2 + 1e-99,
+ * weights 0.1, 0.6, 0.3. */
+static double weno5_reference(const double v[5]) {
+  const double p1 = v[0] / 3 - 7 * v[1] / 6 + 11 * v[2] / 6;
+  const double p2 = -v[1] / 6 + 5 * v[2] / 6 + v[3] / 3;
+  const double p3 = v[2] / 3 + 5 * v[3] / 6 - v[4] / 6;
+  const double s1 = 13.0 / 12 * pow(v[0] - 2 * v[1] + v[2], 2) + 0.25 * pow(v[0] - 4 * v[1] + 3 * v[2], 2);
+  const double s2 = 13.0 / 12 * pow(v[1] - 2 * v[2] + v[3], 2) + 0.25 * pow(v[1] - v[3], 2);
+  const double s3 = 13.0 / 12 * pow(v[2] - 2 * v[3] + v[4], 2) + 0.25 * pow(3 * v[2] - 4 * v[3] + v[4], 2);
+  double m = 0.0;
+  for (int k = 0; k < 5; ++k) m = fmax(m, v[k] * v[k]);
+  const double eps = 1e-6 * m + 1e-99;
+  const double a1 = 0.1 / pow(s1 + eps, 2), a2 = 0.6 / pow(s2 + eps, 2), a3 = 0.3 / pow(s3 + eps, 2);
+  return (a1 * p1 + a2 * p2 + a3 * p3) / (a1 + a2 + a3);
+}
+
+/* lsm_weno5 against the textbook form on random differences, smooth and
+ * rough, at scales from 1e-30 to 1e30 (its indicators are taken of v / max
+ * |v_k|, which must not change the weights), and 0 for all-zero input. */
+static void test_weno5_reference(void **state) {
+  (void)state;
+  uint64_t seed = 0x5eed5eedULL;
+  const double scales[5] = {1e-30, 1e-3, 1.0, 1e3, 1e30};
+  double worst = 0.0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double scale = scales[trial % 5];
+    double v[5];
+    float f[5];
+    const int smooth = trial % 2;
+    const double a = urand(&seed, -2, 2), b = urand(&seed, -0.5, 0.5);
+    for (int k = 0; k < 5; ++k) {
+      const double x = k - 2.0;
+      v[k] = smooth ? a + b * x + urand(&seed, -1e-3, 1e-3) : urand(&seed, -2, 2);
+      f[k] = (float)(scale * v[k]);
+      v[k] = (double)f[k] / scale;
+    }
+    const double want = weno5_reference(v);
+    const double got = lsm_weno5(f[0], f[1], f[2], f[3], f[4]) / scale;
+    double vmax = 0.0;
+    for (int k = 0; k < 5; ++k) vmax = fmax(vmax, fabs(v[k]));
+    worst = fmax(worst, fabs(got - want) / vmax);
+    if (fabs(got - want) > 2e-5 * vmax)
+      fail_msg("trial %d (scale %g): %.9g, textbook %.9g", trial, scale, got, want);
+  }
+  print_message("weno5 against the textbook form: largest error %.2e of max |v|\n", worst);
+  assert_true(lsm_weno5(0.0f, 0.0f, 0.0f, 0.0f, 0.0f) == 0.0f);
+}
+
+/* Every candidate is exact for a cubic phi, so phi_x^- and phi_x^+ are
+ * its derivative; near a kink (phi = |x - 0.3|, the kink between two
+ * cells) the candidates that cross it get almost no weight, so both
+ * derivatives at the cell two cells from the kink are the smooth side's 1,
+ * where the ideal (linear) weights are off by 6 %. */
+static void test_weno5_derivatives(void **state) {
+  (void)state;
+  float phi[7], dd[6];
+  const double xi = 0.7; /* the cell's x; cells at xi + k - 3, unit spacing */
+  for (int k = 0; k < 7; ++k) {
+    const double x = xi + k - 3;
+    phi[k] = (float)(0.5 * x * x * x - 1.5 * x * x + 2.0 * x - 1.0);
+  }
+  for (int k = 0; k < 6; ++k) dd[k] = phi[k + 1] - phi[k];
+  const double exact = 1.5 * xi * xi - 3.0 * xi + 2.0;
+  const float minus = lsm_weno5(dd[0], dd[1], dd[2], dd[3], dd[4]);
+  const float plus = lsm_weno5(dd[5], dd[4], dd[3], dd[2], dd[1]);
+  print_message("cubic: phi_x^- %.7f, phi_x^+ %.7f, exact %.7f\n", minus, plus, exact);
+  assert_close(minus, exact, 1e-5);
+  assert_close(plus, exact, 1e-5);
+  /* |x - 0.3| at cells x = 1.7 + k - 3: the kink between k = 1 and k = 2 */
+  for (int k = 0; k < 7; ++k) phi[k] = (float)fabs(1.7 + k - 3 - 0.3);
+  for (int k = 0; k < 6; ++k) dd[k] = phi[k + 1] - phi[k];
+  const float kink_plus = lsm_weno5(dd[5], dd[4], dd[3], dd[2], dd[1]);
+  const float kink_minus = lsm_weno5(dd[0], dd[1], dd[2], dd[3], dd[4]);
+  const double linear = (0.1 * (2 * dd[5] - 7 * dd[4] + 11 * dd[3]) +
+                         0.6 * (-dd[4] + 5 * dd[3] + 2 * dd[2]) + 0.3 * (2 * dd[3] + 5 * dd[2] - dd[1])) /
+                        6.0;
+  print_message("kink: phi_x^+ %.6f, phi_x^- %.6f (ideal weights: phi_x^+ %.6f)\n", kink_plus,
+                kink_minus, linear);
+  assert_close(kink_plus, 1.0, 1e-3);
+  assert_close(kink_minus, 1.0, 1e-3);
+  assert_true(fabs(linear - 1.0) > 0.05);
+}
+
+/* The stage gathers the WENO stencils right (offsets, strides, ghost
+ * cells, dx != dy): against the textbook WENO derivatives in double and
+ * the Godunov Hamiltonian, on the two-disc field of
+ * test_stage_vs_cell_reference. */
+static void test_weno5_stage_vs_reference(void **state) {
+  (void)state;
+  const int nx = 40, ny = 33;
+  const float dx = 0.8f, dy = 1.1f;
+  lsm_grid *phi = new_grid(nx, ny, dx, dy), *tgt = new_grid(nx, ny, dx, dy);
+  lsm_grid *out = new_grid(nx, ny, dx, dy);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double x = cx_of(phi, i), y = cy_of(phi, j);
+      LSM_AT(phi, i, j) = (float)fmin(hypot(x - 5.2, y - 1.3) - 6.0, hypot(x + 7.9, y + 2.2) - 4.5);
+      LSM_AT(tgt, i, j) = (float)(hypot(x - 1.0, y + 0.7) - 9.0);
+    }
+  const float dt = 0.07f;
+  lsm_scheme_stage(LSM_SCHEME_WENO5, out, phi, phi, tgt, 0.0f, 1.0f, dt, 2);
+  lsm_grid_fill_ghosts(phi);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      double ex[6], ey[6], m[5], p[5], d[4];
+      for (int k = 0; k < 6; ++k) {
+        ex[k] = ((double)LSM_AT(phi, i + k - 2, j) - LSM_AT(phi, i + k - 3, j)) / dx;
+        ey[k] = ((double)LSM_AT(phi, i, j + k - 2) - LSM_AT(phi, i, j + k - 3)) / dy;
+      }
+      for (int axis = 0; axis < 2; ++axis) {
+        const double *e = axis ? ey : ex;
+        for (int k = 0; k < 5; ++k) {
+          m[k] = e[k];
+          p[k] = e[5 - k];
+        }
+        d[2 * axis] = weno5_reference(m);
+        d[2 * axis + 1] = weno5_reference(p);
+      }
+      const float F = LSM_AT(phi, i, j) - LSM_AT(tgt, i, j);
+      const double H =
+          lsm_upwind_hamiltonian(F, (float)d[0], (float)d[1], (float)d[2], (float)d[3]);
+      const double want = LSM_AT(phi, i, j) - dt * H;
+      if (fabs(LSM_AT(out, i, j) - want) > 2e-5 * (1.0 + fabs(want)))
+        fail_msg("weno5 stage at cell (%d, %d): %.7g, reference %.7g", i, j, LSM_AT(out, i, j),
+                 want);
+    }
+  lsm_grid_destroy(&phi);
+  lsm_grid_destroy(&tgt);
+  lsm_grid_destroy(&out);
+}
+
+/* Concentric circles with WENO5 and RK3, dx = 2, 1, 1/2: the front error
+ * falls at least like dx^1.7 (the front is located by linear interpolation
+ * between cells, itself second order, so no more than about 2 shows), and at
+ * dx = 1/2 it is a tenth of upwind's or less. */
+static void test_circles_weno5(void **state) {
+  (void)state;
+  for (int c = 0; c < 2; ++c) {
+    const double r1 = c ? 10.0 : 20.0, r2 = c ? 20.0 : 10.0;
+    const circle_run w32 = run_circles(32, r1, r2, LSM_SCHEME_WENO5, LSM_TIME_RK3, 0.75);
+    const circle_run w64 = run_circles(64, r1, r2, LSM_SCHEME_WENO5, LSM_TIME_RK3, 0.75);
+    const circle_run w128 = run_circles(128, r1, r2, LSM_SCHEME_WENO5, LSM_TIME_RK3, 0.75);
+    const circle_run u128 = run_circles(128, r1, r2, LSM_SCHEME_UPWIND, LSM_TIME_RK3, 0.75);
+    const double o1 = log2(max3(w32.err) / max3(w64.err)), o2 = log2(max3(w64.err) / max3(w128.err));
+    print_message("circle weno5/rk3 %g->%g: worst error %.2e %.2e %.2e (orders %.2f %.2f), "
+                  "upwind/rk3 at dx=0.5 %.2e\n",
+                  r1, r2, max3(w32.err), max3(w64.err), max3(w128.err), o1, o2, max3(u128.err));
+    assert_true(o1 >= 1.7 && o2 >= 1.7);
+    assert_true(max3(w128.err) <= 0.1 * max3(u128.err));
+  }
 }
 
 /* Time accuracy.  Against a reference with a 20x smaller step (same grid,
@@ -1348,6 +1504,10 @@ int main(void) {
       cmocka_unit_test(test_front_measure),
       cmocka_unit_test(test_circles_upwind),
       cmocka_unit_test(test_circles_roefix),
+      cmocka_unit_test(test_weno5_reference),
+      cmocka_unit_test(test_weno5_derivatives),
+      cmocka_unit_test(test_weno5_stage_vs_reference),
+      cmocka_unit_test(test_circles_weno5),
       cmocka_unit_test(test_integrators_circle),
       cmocka_unit_test(test_reinit),
       cmocka_unit_test(test_reinit_tiny_pixels),
