@@ -474,6 +474,23 @@ static void test_roefix_linear_equals_upwind(void **state) {
   lsm_grid_destroy(&o2);
 }
 
+/* The fields of the stage tests, nx x ny cells of dx x dy: phi the distance
+ * to the union of two discs (kinks along the bisector and at the centres),
+ * the target a third disc's, and an output grid. */
+static void two_disc_fields(int nx, int ny, float dx, float dy, lsm_grid **phi, lsm_grid **tgt,
+                            lsm_grid **out) {
+  *phi = new_grid(nx, ny, dx, dy);
+  *tgt = new_grid(nx, ny, dx, dy);
+  *out = new_grid(nx, ny, dx, dy);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double x = cx_of(*phi, i), y = cy_of(*phi, j);
+      LSM_AT(*phi, i, j) =
+          (float)fmin(hypot(x - 5.2, y - 1.3) - 6.0, hypot(x + 7.9, y + 2.2) - 4.5);
+      LSM_AT(*tgt, i, j) = (float)(hypot(x - 1.0, y + 0.7) - 9.0);
+    }
+}
+
 /* Grid stages against per-cell references assembled here from the stencil
  * (checks the stencil gathering: offsets, strides, ghost cells, dx != dy).
  * Field: the distance to the union of two discs (kinks along the bisector
@@ -482,14 +499,8 @@ static void test_stage_vs_cell_reference(void **state) {
   (void)state;
   const int nx = 40, ny = 33;
   const float dx = 0.8f, dy = 1.1f;
-  lsm_grid *phi = new_grid(nx, ny, dx, dy), *tgt = new_grid(nx, ny, dx, dy);
-  lsm_grid *out = new_grid(nx, ny, dx, dy);
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const double x = cx_of(phi, i), y = cy_of(phi, j);
-      LSM_AT(phi, i, j) = (float)fmin(hypot(x - 5.2, y - 1.3) - 6.0, hypot(x + 7.9, y + 2.2) - 4.5);
-      LSM_AT(tgt, i, j) = (float)(hypot(x - 1.0, y + 0.7) - 9.0);
-    }
+  lsm_grid *phi = NULL, *tgt = NULL, *out = NULL;
+  two_disc_fields(nx, ny, dx, dy, &phi, &tgt, &out);
   const float dt = 0.07f;
   int seen[4] = {0, 0, 0, 0};
   for (int sc = 0; sc < 2; ++sc) {
@@ -939,14 +950,8 @@ static void test_weno5_stage_vs_reference(void **state) {
   (void)state;
   const int nx = 40, ny = 33;
   const float dx = 0.8f, dy = 1.1f;
-  lsm_grid *phi = new_grid(nx, ny, dx, dy), *tgt = new_grid(nx, ny, dx, dy);
-  lsm_grid *out = new_grid(nx, ny, dx, dy);
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const double x = cx_of(phi, i), y = cy_of(phi, j);
-      LSM_AT(phi, i, j) = (float)fmin(hypot(x - 5.2, y - 1.3) - 6.0, hypot(x + 7.9, y + 2.2) - 4.5);
-      LSM_AT(tgt, i, j) = (float)(hypot(x - 1.0, y + 0.7) - 9.0);
-    }
+  lsm_grid *phi = NULL, *tgt = NULL, *out = NULL;
+  two_disc_fields(nx, ny, dx, dy, &phi, &tgt, &out);
   const float dt = 0.07f;
   lsm_scheme_stage(LSM_SCHEME_WENO5, out, phi, phi, tgt, 0.0f, 1.0f, dt, 2);
   lsm_grid_fill_ghosts(phi);
