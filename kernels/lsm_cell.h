@@ -236,10 +236,12 @@ LSM_FN float lsm_roefix_hamiltonian(float F, const LSM_PRIV float *xm, const LSM
  * give 0.  Every candidate is exact for a quadratic phi, so the weights only
  * matter where phi is not one. */
 LSM_FN float lsm_weno5(float v1, float v2, float v3, float v4, float v5) {
-  const float a = lsm_maxf(lsm_maxf(lsm_maxf(LSM_FABS(v1), LSM_FABS(v2)),
+  float a = lsm_maxf(lsm_maxf(lsm_maxf(LSM_FABS(v1), LSM_FABS(v2)),
                                     lsm_maxf(LSM_FABS(v3), LSM_FABS(v4))),
                            LSM_FABS(v5));
-  if (!(a > 0.0f)) return 0.0f;
+  /* all-zero differences: w = 0 and every candidate 0 (a select, not a
+   * branch, so that the cell loop vectorises) */
+  a = lsm_maxf(a, 1.17549435e-38f);
   const float w1 = v1 / a, w2 = v2 / a, w3 = v3 / a, w4 = v4 / a, w5 = v5 / a;
   const float q1 = w1 - 2.0f * w2 + w3, r1 = w1 - 4.0f * w2 + 3.0f * w3;
   const float q2 = w2 - 2.0f * w3 + w4, r2 = w2 - w4;

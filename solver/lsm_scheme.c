@@ -114,6 +114,7 @@ static void stage_roefix(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
 
 /* The row and the column of seven values through each cell, as the OpenCL
  * kernel loads them. */
+LSM_HOT_CLONES
 static void stage_weno5(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
                         const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {
   const float inv_dx = 1.0f / in->dx, inv_dy = 1.0f / in->dy;
