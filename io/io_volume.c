@@ -5,6 +5,7 @@
  *   mha   volume.mha   MetaImage header (io_mha.c) + samples, little endian
  *   vtk   volume.vtk   legacy VTK header (io_vtk.c) + samples, big endian
  *   raw   volume.raw   samples only, little endian; volume.json at the end
+ *   nii   volume.nii   NIfTI-1 header (io_nifti.c) + samples, little endian
  *   exr   exr/NNNNN.exr one OpenEXR file per slice (io_exr.c)
  *
  * Each slice is converted once per sample encoding and appended to every file
@@ -43,7 +44,8 @@ static const format_entry formats_known[] = {{LSM_FORMAT_NRRD, "nrrd"},
                                               {LSM_FORMAT_MHA, "mha"},
                                               {LSM_FORMAT_VTK, "vtk"},
                                               {LSM_FORMAT_EXR, "exr"},
-                                              {LSM_FORMAT_RAW, "raw"}};
+                                              {LSM_FORMAT_RAW, "raw"},
+                                              {LSM_FORMAT_NII, "nii"}};
 #define FORMAT_COUNT (sizeof formats_known / sizeof formats_known[0])
 
 const char *lsm_format_name(unsigned format) {
@@ -67,7 +69,7 @@ lsm_status lsm_format_list_parse(const char *list, unsigned *formats, lsm_err *e
       if (len == 0)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--format: empty name in '%s'", list);
       return lsm_fail(err, LSM_ERR_USAGE, NULL,
-                      "--format: '%.*s' is not one of nrrd, mha, vtk, exr, raw", (int)(len > 64 ? 64 : len), p);
+                      "--format: '%.*s' is not one of nrrd, mha, vtk, nii, exr, raw", (int)(len > 64 ? 64 : len), p);
     }
     set |= bit;
     if (!end) break;
@@ -82,7 +84,8 @@ size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap) {
     unsigned bit;
     const char *file;
   } files[] = {{LSM_FORMAT_NRRD, "volume.nrrd"}, {LSM_FORMAT_MHA, "volume.mha"},
-               {LSM_FORMAT_VTK, "volume.vtk"},   {LSM_FORMAT_RAW, "volume.raw"},
+               {LSM_FORMAT_VTK, "volume.vtk"},   {LSM_FORMAT_NII, "volume.nii"},
+               {LSM_FORMAT_RAW, "volume.raw"},
                {LSM_FORMAT_RAW, "volume.json"},  {LSM_FORMAT_EXR, "exr/"}};
   size_t n = 0;
   for (size_t k = 0; k < sizeof files / sizeof files[0]; ++k) {
@@ -117,7 +120,7 @@ struct lsm_volume_writer {
   char *dir;
   unsigned formats;
   lsm_volume_info info;
-  vol_stream streams[4];
+  vol_stream streams[5];
   int nstreams;
   size_t samples;                 /* nx * ny */
   unsigned char *buf[ENC_COUNT];  /* one converted slice per encoding in use */
@@ -143,6 +146,7 @@ static size_t stream_header(const vol_stream *s, const lsm_volume_info *info, ch
   case LSM_FORMAT_NRRD: return nrrd_u8_header(out, cap, info);
   case LSM_FORMAT_MHA: return lsm_mha_header(out, cap, info);
   case LSM_FORMAT_VTK: return lsm_vtk_header(out, cap, info);
+  case LSM_FORMAT_NII: return lsm_nifti_header((unsigned char *)out, cap, info);
   default: return 0;
   }
 }
@@ -157,6 +161,7 @@ static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *er
   const char *name = format == LSM_FORMAT_NRRD  ? "volume.nrrd"
                      : format == LSM_FORMAT_MHA ? "volume.mha"
                      : format == LSM_FORMAT_VTK ? "volume.vtk"
+                     : format == LSM_FORMAT_NII ? "volume.nii"
                                                 : "volume.raw";
   s->enc = mask ? ENC_U8 : format == LSM_FORMAT_VTK ? ENC_F32_BE : ENC_F32_LE;
   s->path = join_path(w->dir, name);
@@ -189,6 +194,10 @@ lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values 
   if (values != LSM_VALUES_SDF && values != LSM_VALUES_MASK)
     return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad value kind %d", (int)values);
   LSM_TRY(lsm_volume_check_geometry(dir, nx, ny, sx, sy, sz, ox, oy, oz, err));
+  if ((formats & LSM_FORMAT_NII) && (nx > LSM_NIFTI_DIM_MAX || ny > LSM_NIFTI_DIM_MAX))
+    return lsm_fail(err, LSM_ERR_LIMIT, dir,
+                    "volume.nii: NIfTI-1 holds at most %d samples along an axis, the slices are "
+                    "%dx%d (choose another --format)", LSM_NIFTI_DIM_MAX, nx, ny);
   const size_t bytes = (size_t)nx * (size_t)ny * 4;
 
   lsm_volume_writer *w = calloc(1, sizeof *w);
@@ -215,7 +224,8 @@ lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values 
   v->values = values;
 
   lsm_status st = LSM_OK;
-  static const unsigned order[] = {LSM_FORMAT_NRRD, LSM_FORMAT_MHA, LSM_FORMAT_VTK, LSM_FORMAT_RAW};
+  static const unsigned order[] = {LSM_FORMAT_NRRD, LSM_FORMAT_MHA, LSM_FORMAT_VTK,
+                                   LSM_FORMAT_NII, LSM_FORMAT_RAW};
   for (size_t k = 0; st == LSM_OK && k < sizeof order / sizeof order[0]; ++k)
     if (formats & order[k]) st = stream_open(w, order[k], err);
   for (int k = 0; st == LSM_OK && k < w->nstreams; ++k) {
@@ -275,6 +285,12 @@ lsm_status lsm_volume_writer_write_slice(lsm_volume_writer *w, const float *phi,
   if (!w || !phi)
     return lsm_fail(err, LSM_ERR_INTERNAL, w ? w->dir : NULL, "bad arguments to write a slice");
   if (w->failed) return lsm_fail(err, LSM_ERR_IO, w->dir, "an earlier write failed");
+  if ((w->formats & LSM_FORMAT_NII) && w->slices >= LSM_NIFTI_DIM_MAX) {
+    w->failed = 1;
+    return lsm_fail(err, LSM_ERR_LIMIT, w->dir,
+                    "volume.nii: NIfTI-1 holds at most %d slices, and a slice more came "
+                    "(choose another --format)", LSM_NIFTI_DIM_MAX);
+  }
   int done[ENC_COUNT] = {0};
   for (int k = 0; k < w->nstreams; ++k) {
     vol_stream *s = &w->streams[k];

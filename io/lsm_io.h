@@ -7,6 +7,7 @@
  *   io_volume.c   streaming writer for every selected volume format at once
  *   io_mha.c      MetaImage header (volume.mha)
  *   io_vtk.c      legacy VTK header (volume.vtk)
+ *   io_nifti.c    NIfTI-1 header (volume.nii)
  *   io_raw.c      JSON sidecar of volume.raw
  *   io_json.c     JSON strings and numbers (run.json, scores, volume.json)
  *   io_exr.c      one OpenEXR file per slice (OpenEXRCore C API)
@@ -156,7 +157,8 @@ lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t
 #define LSM_FORMAT_VTK 0x04u  /* volume.vtk: legacy BINARY STRUCTURED_POINTS, big endian */
 #define LSM_FORMAT_EXR 0x08u  /* exr/00001.exr ...: one OpenEXR scanline file per slice */
 #define LSM_FORMAT_RAW 0x10u  /* volume.raw + volume.json sidecar, little endian */
-#define LSM_FORMAT_ALL 0x1fu
+#define LSM_FORMAT_NII 0x20u  /* volume.nii: NIfTI-1 single file, little endian */
+#define LSM_FORMAT_ALL 0x3fu
 
 /* What the volume holds: the signed distance (float32, physical units,
  * negative inside) or a mask (uint8, 255 where phi <= 0, else 0; in EXR
@@ -172,12 +174,12 @@ const char *lsm_values_name(lsm_values v);
 lsm_values lsm_values_from_name(const char *name);
 /* Name of one format bit ("nrrd"), or "unknown". */
 const char *lsm_format_name(unsigned format);
-/* Parses a comma-separated list ("nrrd,mha,vtk,exr,raw", any order, repeats
+/* Parses a comma-separated list ("nrrd,mha,vtk,exr,raw,nii", any order, repeats
  * allowed) into a set of LSM_FORMAT_* bits; LSM_ERR_USAGE on an empty list or
  * an unknown name. */
 lsm_status lsm_format_list_parse(const char *list, unsigned *formats, lsm_err *err);
 /* The names, relative to the output folder, of the files (folders end in '/')
- * the given formats write, in a fixed order; returns how many (at most 6),
+ * the given formats write, in a fixed order; returns how many (at most 7),
  * storing at most cap of them in names. */
 size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap);
 
@@ -198,6 +200,19 @@ typedef struct lsm_volume_info {
  * small. */
 size_t lsm_mha_header(char *out, size_t cap, const lsm_volume_info *info);
 size_t lsm_vtk_header(char *out, size_t cap, const lsm_volume_info *info);
+
+/* NIfTI-1 ("n+1", one file): the 348-byte header and the 4-byte extension
+ * flag, little endian, samples from byte LSM_NIFTI_HEADER_BYTES on: float32
+ * (DT_FLOAT32) for LSM_VALUES_SDF, uint8 (DT_UINT8) for LSM_VALUES_MASK.  The
+ * qform and sform are diag(-sx, -sy, sz) with offset (-ox, -oy, oz): NIfTI's
+ * world is RAS, and ITK and 3D Slicer, which work in LPS, place the volume
+ * exactly where they place volume.nrrd and volume.mha.  Sizes are 16-bit in
+ * NIfTI-1: returns 0 (nothing written) when nx, ny or nz passes
+ * LSM_NIFTI_DIM_MAX or cap is short; else LSM_NIFTI_HEADER_BYTES.  No NUL is
+ * added (the header is binary). */
+#define LSM_NIFTI_HEADER_BYTES 352
+#define LSM_NIFTI_DIM_MAX 32767
+size_t lsm_nifti_header(unsigned char *out, size_t cap, const lsm_volume_info *info);
 
 /* ---- JSON ---------------------------------------------------------------- */
 
@@ -243,7 +258,9 @@ typedef struct lsm_volume_writer lsm_volume_writer;
 
 /* Creates dir/volume.<ext> for each selected format (and dir/exr/ for EXR)
  * for nx x ny slices with pixel spacings sx, sy, provisional slice spacing
- * sz and first-sample origin (ox, oy, oz). */
+ * sz and first-sample origin (ox, oy, oz).  With LSM_FORMAT_NII, nx and ny
+ * above LSM_NIFTI_DIM_MAX are refused here (LSM_ERR_LIMIT) and a slice past
+ * that count by lsm_volume_writer_write_slice. */
 lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values values, int nx,
                                   int ny, double sx, double sy, double sz, double ox, double oy,
                                   double oz, lsm_volume_writer **out, lsm_err *err);

@@ -1,6 +1,6 @@
 """Helpers of tests/test_formats.sh: synthetic input and checks of every output
 format with real readers (VTK's Python module, OpenImageIO's oiiotool/iinfo).
-Run with Debian's /usr/bin/python3 (python3-vtk9, python3-numpy).
+Run with Debian's /usr/bin/python3 (python3-vtk9, python3-numpy, python3-nibabel).
 
   formats_check.py ball DIR SIZE COUNT STRIDE R CX CY CZ
       writes the slices k = 0, STRIDE, 2 STRIDE, ... < COUNT of a ball (radius R
@@ -10,7 +10,7 @@ Run with Debian's /usr/bin/python3 (python3-vtk9, python3-numpy).
       writes each ball slice of SRC as its 1-px outline in DST (--input outline)
   formats_check.py check OUT --spacing SX SY SZ --values sdf|mask
                    [--mesh] [--caps] [--ball R CX CY CZ] [--pixel P]
-      checks OUT (written with --format nrrd,mha,vtk,exr,raw and, with --mesh
+      checks OUT (written with --format nrrd,mha,vtk,nii,exr,raw and, with --mesh
       or --ball, --mesh); SZ "auto": the mean step of heights.txt; --caps: the
       object is cut by the first and last slices, so the mesh has flat caps
       half a slice step beyond them.  Prints "ok - ..." or "FAIL - ..." per
@@ -84,6 +84,43 @@ def close(a, b, tol=1e-9):
     return all(abs(x - y) <= tol * max(1.0, abs(x), abs(y)) for x, y in zip(a, b))
 
 
+def check_nifti(out, vtk, vtk_to_numpy, raw, dims, spacing, z0, mask):
+    """volume.nii through two independent readers: VTK's vtkNIFTIImageReader and nibabel.
+    Both must give volume.raw's samples; nibabel's affine must be diag(-sx, -sy, sz) with
+    offset (0, 0, z0) (RAS, so that ITK's LPS gets the identity, as for volume.nrrd)."""
+    import numpy as np
+    path = os.path.join(out, "volume.nii")
+    r = vtk.vtkNIFTIImageReader()
+    r.SetFileName(path)
+    r.Update()
+    im = r.GetOutput()
+    scal = im.GetPointData().GetScalars() if im and im.GetPointData() else None
+    if report(scal is not None and im.GetDimensions() == dims,
+              "VTK reads volume.nii: dimensions %s (want %s)" % (im.GetDimensions() if im else None, dims)):
+        a = vtk_to_numpy(scal)
+        report(close(im.GetSpacing(), spacing, 1e-6), "volume.nii spacing %s == %s (VTK)" % (im.GetSpacing(), spacing))
+        report(a.dtype == (np.uint8 if mask else np.float32) and np.array_equal(a, raw),
+               "volume.nii has the same values as volume.raw (VTK, %s)" % a.dtype)
+        q = r.GetQFormMatrix()
+        qm = [[q.GetElement(i, j) for j in range(4)] for i in range(3)] if q else None
+        want = [[-1, 0, 0, 0], [0, -1, 0, 0], [0, 0, 1, z0]]
+        report(qm is not None and all(close(qm[i], want[i], 1e-6) for i in range(3)),
+               "volume.nii qform (VTK) %s == %s" % (qm, want))
+    import nibabel
+    img = nibabel.load(path)
+    data = np.asarray(img.dataobj)
+    report(data.shape == dims and data.dtype == (np.uint8 if mask else np.float32),
+           "nibabel reads volume.nii: shape %s, %s" % (data.shape, data.dtype))
+    report(data.shape == dims and np.array_equal(data.ravel(order="F"), raw),
+           "volume.nii has the same values as volume.raw (nibabel)")
+    sx, sy, sz = spacing
+    want = np.array([[-sx, 0, 0, 0], [0, -sy, 0, 0], [0, 0, sz, z0], [0, 0, 0, 1]])
+    for name, (aff, code) in (("sform", img.header.get_sform(coded=True)),
+                              ("qform", img.header.get_qform(coded=True))):
+        report(aff is not None and int(code) == 1 and np.allclose(aff, want, rtol=1e-6, atol=1e-6 * abs(z0)),
+               "volume.nii %s (nibabel, code %s) == diag(-sx, -sy, sz) + (0, 0, z0)" % (name, code))
+
+
 def check(args):
     import numpy as np
     out = args[0]
@@ -136,6 +173,7 @@ def check(args):
         report(a.shape == raw.shape and np.array_equal(a, raw),
                "volume.%s has the same values as volume.raw" % fmt)
     vol = raw.reshape(nz, ny, nx)
+    check_nifti(out, vtk, vtk_to_numpy, raw, (nx, ny, nz), spacing, heights[0], mask)
     if mask:
         report(set(np.unique(vol).tolist()) <= {0, 255}, "mask values are 0 and 255")
 
@@ -215,7 +253,7 @@ def check(args):
         report(ok, "%s is an RGB picture with content" % name)
     run = json.load(open(os.path.join(out, "run.json")))
     files_listed = run.get("output", {}).get("files", [])
-    report(all(f in files_listed for f in ("volume.nrrd", "volume.mha", "volume.vtk", "volume.raw",
+    report(all(f in files_listed for f in ("volume.nrrd", "volume.mha", "volume.vtk", "volume.nii", "volume.raw",
                                              "volume.json", "exr/", "preview.png", "preview3d.png")),
            "run.json output files %s" % files_listed)
 

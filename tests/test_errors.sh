@@ -90,6 +90,7 @@ png gray8 sizes/1.png 32 5 && png gray8 sizes/2.png 32 7 && png gray8 sizes/3.pn
 png huge huge/1.png && png huge huge/2.png
 png huge_idat huge2/1.png && png huge_idat huge2/2.png
 png gray8 strip/1.png 20000x1 3 && png gray8 strip/2.png 20000x1 5
+png gray8 wide/1.png 32800x1 3 && png gray8 wide/2.png 32800x1 5 # wider than NIfTI-1 holds
 KINDS="gray16 gray1 graya8 rgb8 rgb16 rgba8 rgba16 palette palette_trns palette2 interlaced text_chunks"
 for kind in $KINDS; do
   for i in 1 2 3; do png "$kind" "k-$kind/$i.png" 32 $((3 + 2 * i)); done
@@ -155,6 +156,12 @@ expect "--max-voxels" 1 "more than --max-voxels 3000" out reconstruct good -o ou
 expect "--max-voxels, per iteration" 1 "good: 2 output slices of 32x32 written; one more would pass --max-voxels 3000" out \
   reconstruct good -o out -q --per-iteration --max-voxels 3000
 expect "2e13 output slices" 1 "the output would have 2e+13 slices of 32x32" out reconstruct good -o out -q --spacing 1e10 --dz 1e-3
+# NIfTI-1 sizes are 16-bit: refused before the run, not after it
+expect "--format nii, slices wider than 32767" 1 "wide/1.png: 32800x1 slices do not fit volume.nii" out \
+  reconstruct wide -o out -q --format nrrd,nii
+expect "--format nii, 40001 output slices" 1 "good: the output would have 40001 slices, more than the 32767 volume.nii holds" \
+  out reconstruct good -o out -q --format nii --spacing 2 --dz 1e-4
+expect "--format nifti" 2 "--format: 'nifti' is not one of nrrd, mha, vtk, nii, exr, raw" out reconstruct good -o out --format nifti
 # a 20000x1 strip: an aligned gap pads each axis by up to half its side, a
 # canvas of up to 40004 x 5 cells, more than 4 x --max-pixels 20000
 expect "aligned canvas of a long strip" 1 "strip/1.png: 20000x1 slices need a working canvas" out \

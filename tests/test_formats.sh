@@ -2,7 +2,7 @@
 # Output formats of lsmorph, checked with real readers:
 #   sh tests/test_formats.sh BUILD_DIR
 # A ball of radius 40 px (128 x 128 x 105 slices) is cut into slices, every 8th
-# is kept and reconstructed with --format nrrd,mha,vtk,exr,raw --mesh; then
+# is kept and reconstructed with --format nrrd,mha,vtk,nii,exr,raw --mesh; then
 # (tests/formats_check.py, run with Debian's /usr/bin/python3):
 #   - VTK opens volume.nrrd, volume.mha and volume.vtk with the same values as
 #     volume.raw (+ volume.json) and the right dimensions, spacing and origin
@@ -41,7 +41,7 @@ run_checks() {
 
 need "$LSM"
 [ -x "$PY" ] || { bad "$PY is missing (Debian package python3)"; finish; }
-"$PY" -c 'import vtk, numpy' 2>/dev/null || { bad "$PY cannot import vtk and numpy (Debian packages python3-vtk9, python3-numpy)"; finish; }
+"$PY" -c 'import vtk, numpy, nibabel' 2>/dev/null || { bad "$PY cannot import vtk, numpy and nibabel (Debian packages python3-vtk9, python3-numpy, python3-nibabel)"; finish; }
 command -v oiiotool >/dev/null 2>&1 && command -v iinfo >/dev/null 2>&1 ||
   { bad "oiiotool / iinfo are missing (Debian package openimageio-tools)"; finish; }
 
@@ -72,10 +72,10 @@ CX=63.3
 CY=64.6
 CZ=52.4
 check "ball slices written" "$PY" "$HELPER" ball "$TMP/ball" 128 105 8 $R $CX $CY $CZ
-"$LSM" reconstruct "$TMP/ball" -o "$TMP/out" --spacing 8 --format nrrd,mha,vtk,exr,raw --mesh -q \
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/out" --spacing 8 --format nrrd,mha,vtk,nii,exr,raw --mesh -q \
   >"$TMP/log" 2>&1
 rc=$?
-check "reconstruct --format nrrd,mha,vtk,exr,raw --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+check "reconstruct --format nrrd,mha,vtk,nii,exr,raw --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
   check "nothing printed with -q" [ ! -s "$TMP/log" ]
   run_checks "$TMP/check1" "$PY" "$HELPER" check "$TMP/out" --spacing 1 1 1 --values sdf \
@@ -92,7 +92,7 @@ fi
 n_ball=$(ls "$TMP/ball"/*.png | wc -l)
 awk -v n="$n_ball" 'BEGIN { for (k = 0; k < n; ++k) print 5.5 + 4 * k }' >"$TMP/heights55.txt"
 "$LSM" reconstruct "$TMP/ball" -o "$TMP/mask" --heights "$TMP/heights55.txt" --pixel-size 0.5 --dz 1 \
-  --values mask --format raw,exr,vtk,mha,nrrd -q >"$TMP/log" 2>&1
+  --values mask --format raw,exr,vtk,nii,mha,nrrd -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --values mask exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -106,7 +106,7 @@ fi
 # are not symmetric, so no two input slices are equal)
 check "per-iteration slices written" "$PY" "$HELPER" ball "$TMP/pi" 64 41 8 24 31.5 32.2 18.7
 "$LSM" reconstruct "$TMP/pi" -o "$TMP/piout" --spacing 8 --pixel-size 0.5 --per-iteration \
-  --format nrrd,mha,vtk,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+  --format nrrd,mha,vtk,nii,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --per-iteration exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -121,7 +121,7 @@ check "--per-iteration --dz 5 gives the same mesh" cmp -s "$TMP/piout/surface.pl
 # ---- outlines: phi is exactly 0 on the contour pixels; the mesh has no degenerate triangles --------
 check "outline slices written" "$PY" "$HELPER" outline "$TMP/pi" "$TMP/pi-outline"
 "$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olout" --input outline --spacing 8 \
-  --format nrrd,mha,vtk,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+  --format nrrd,mha,vtk,nii,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --input outline --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -140,7 +140,7 @@ fi
 n_pi=$(ls "$TMP/pi-outline"/*.png | wc -l)
 awk -v n="$n_pi" 'BEGIN { for (k = 0; k < n; ++k) print 100000 + 8 * k }' >"$TMP/heights1e5.txt"
 "$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olfar" --input outline --heights "$TMP/heights1e5.txt" \
-  --format nrrd,mha,vtk,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+  --format nrrd,mha,vtk,nii,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --input outline --mesh at heights from 1e5 exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -151,7 +151,7 @@ fi
 "$LSM" reconstruct "$TMP/ball" -o "$TMP/def" --spacing 8 --no-slices -q >/dev/null 2>&1
 check "default run exits 0" [ $? -eq 0 ]
 check "default run writes volume.nrrd" [ -f "$TMP/def/volume.nrrd" ]
-check "default run writes no other volume" sh -c '[ ! -e "$1/volume.mha" ] && [ ! -e "$1/volume.vtk" ] && [ ! -e "$1/volume.raw" ] && [ ! -e "$1/exr" ]' _ "$TMP/def"
+check "default run writes no other volume" sh -c '[ ! -e "$1/volume.mha" ] && [ ! -e "$1/volume.vtk" ] && [ ! -e "$1/volume.nii" ] && [ ! -e "$1/volume.raw" ] && [ ! -e "$1/exr" ]' _ "$TMP/def"
 check "default run writes no mesh" [ ! -e "$TMP/def/surface.ply" ]
 check "--no-slices: no slices/ folder" [ ! -e "$TMP/def/slices" ]
 check "default run writes preview.png and preview3d.png" sh -c '[ -f "$1/preview.png" ] && [ -f "$1/preview3d.png" ]' _ "$TMP/def"

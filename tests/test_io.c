@@ -1074,6 +1074,140 @@ static void test_nrrd_errors(void **state) {
   }
 }
 
+/* ---- NIfTI-1 (volume.nii) ------------------------------------------------------------ */
+
+static int16_t le16s(const uint8_t *p) { return (int16_t)(uint16_t)(p[0] | (p[1] << 8)); }
+
+static float le_f32(const uint8_t *p) {
+  uint32_t u = le32(p);
+  float v;
+  memcpy(&v, &u, sizeof v);
+  return v;
+}
+
+/* Writes volume.nii and volume.raw of three slices through the volume writer;
+ * returns volume.nii's bytes (and *len). */
+static uint8_t *write_nii(const char *dir, lsm_values values, size_t *len, uint8_t **raw,
+                          size_t *raw_len) {
+  enum { NX = 4, NY = 3, NZ = 3 };
+  float vals[NZ][NX * NY];
+  for (int z = 0; z < NZ; ++z)
+    for (int k = 0; k < NX * NY; ++k) vals[z][k] = (float)(z * 100 + k) * 0.25f - 7.0f;
+  vals[1][5] = 0.0f; /* phi = 0 counts as inside in a mask */
+  lsm_volume_writer *w = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  if (lsm_volume_writer_open(dir, LSM_FORMAT_NII | LSM_FORMAT_RAW, values, NX, NY, 0.5, 0.25,
+                             9.0, 1.5, 0.0, 3.25, &w, &err) != LSM_OK)
+    fail_msg("%s", err.msg);
+  for (int z = 0; z < NZ; ++z)
+    assert_int_equal(lsm_volume_writer_write_slice(w, vals[z], 3.25 + 2.5 * z, &err), LSM_OK);
+  if (lsm_volume_writer_finish(&w, 2.5, NZ, &err) != LSM_OK) fail_msg("%s", err.msg);
+  char path[256];
+  join(path, sizeof path, dir, "volume.raw");
+  *raw = read_bytes(path, raw_len);
+  join(path, sizeof path, dir, "volume.nii");
+  return read_bytes(path, len);
+}
+
+/* Every field a reader needs, at its offset in the NIfTI-1 layout; the samples
+ * after byte 352 are volume.raw's. */
+static void test_nifti_header_fields(void **state) {
+  tmp_fixture *f = *state;
+  for (int pass = 0; pass < 2; ++pass) {
+    const int mask = pass == 1;
+    size_t len = 0, raw_len = 0;
+    uint8_t *raw = NULL;
+    uint8_t *h = write_nii(f->dir, mask ? LSM_VALUES_MASK : LSM_VALUES_SDF, &len, &raw, &raw_len);
+    const size_t samples = 4 * 3 * 3, bytes = samples * (mask ? 1u : 4u);
+    assert_int_equal(len, LSM_NIFTI_HEADER_BYTES + bytes);
+    assert_int_equal(raw_len, bytes);
+    assert_int_equal(le32(h + 0), 348);                /* sizeof_hdr: little endian */
+    assert_int_equal(h[38], 'r');
+    const int16_t dim[8] = {3, 4, 3, 3, 1, 1, 1, 1};
+    for (int k = 0; k < 8; ++k) assert_int_equal(le16s(h + 40 + 2 * k), dim[k]);
+    assert_int_equal(le16s(h + 70), mask ? 2 : 16);   /* DT_UINT8 / DT_FLOAT32 */
+    assert_int_equal(le16s(h + 72), mask ? 8 : 32);
+    const float pixdim[4] = {1.0f, 0.5f, 0.25f, 2.5f}; /* qfac, then the final z step */
+    for (int k = 0; k < 4; ++k) assert_true(le_f32(h + 76 + 4 * k) == pixdim[k]);
+    assert_true(le_f32(h + 108) == 352.0f);            /* vox_offset */
+    assert_true(le_f32(h + 112) == 1.0f && le_f32(h + 116) == 0.0f); /* scl_slope, inter */
+    assert_true(le_f32(h + 124) == (mask ? 255.0f : 0.0f) && le_f32(h + 128) == 0.0f);
+    assert_int_equal(h[123], 0);                       /* xyzt_units: unknown */
+    assert_int_equal(le16s(h + 252), 1);               /* qform_code */
+    assert_int_equal(le16s(h + 254), 1);               /* sform_code */
+    const float quat[6] = {0.0f, 0.0f, 1.0f, -1.5f, 0.0f, 3.25f}; /* b c d, offsets */
+    for (int k = 0; k < 6; ++k) assert_true(le_f32(h + 256 + 4 * k) == quat[k]);
+    assert_false(h[272 + 3] & 0x80);                   /* qoffset_y is +0, not -0 */
+    const float srow[12] = {-0.5f, 0, 0, -1.5f, 0, -0.25f, 0, 0, 0, 0, 2.5f, 3.25f};
+    for (int k = 0; k < 12; ++k)
+      if (le_f32(h + 280 + 4 * k) != srow[k])
+        fail_msg("srow element %d: %g, want %g", k, (double)le_f32(h + 280 + 4 * k),
+                 (double)srow[k]);
+    assert_memory_equal(h + 344, "n+1", 4);
+    for (int k = 348; k < 352; ++k) assert_int_equal(h[k], 0); /* no extensions */
+    assert_non_null(memchr(h + 148, '\0', 80));        /* descrip is terminated */
+    assert_memory_equal(h + LSM_NIFTI_HEADER_BYTES, raw, bytes);
+    if (mask) {
+      assert_int_equal(h[LSM_NIFTI_HEADER_BYTES + 12 + 5], 255); /* phi = 0: inside */
+      for (size_t k = 0; k < samples; ++k)
+        assert_true(h[LSM_NIFTI_HEADER_BYTES + k] == 0 || h[LSM_NIFTI_HEADER_BYTES + k] == 255);
+    }
+    free(h);
+    free(raw);
+  }
+}
+
+/* NIfTI-1 sizes are 16-bit: wider slices are refused at open, a 32768th slice
+ * when it comes; the header builder refuses them too. */
+static void test_nifti_limits(void **state) {
+  tmp_fixture *f = *state;
+  lsm_volume_writer *w = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_volume_writer_open(f->dir, LSM_FORMAT_NII, LSM_VALUES_SDF,
+                                          LSM_NIFTI_DIM_MAX + 1, 1, 1, 1, 1, 0, 0, 0, &w, &err),
+                   LSM_ERR_LIMIT);
+  assert_null(w);
+  assert_msg_contains(err, "32767");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_volume_writer_open(f->dir, LSM_FORMAT_NII, LSM_VALUES_MASK, 1, 1, 1, 1,
+                                          1, 0, 0, 0, &w, &err),
+                   LSM_OK);
+  const float one = -1.0f;
+  lsm_status st = LSM_OK;
+  for (int k = 0; st == LSM_OK && k < LSM_NIFTI_DIM_MAX; ++k)
+    st = lsm_volume_writer_write_slice(w, &one, k, &err);
+  assert_int_equal(st, LSM_OK);
+  assert_int_equal(lsm_volume_writer_write_slice(w, &one, 1e6, &err), LSM_ERR_LIMIT);
+  assert_msg_contains(err, "volume.nii");
+  assert_int_equal(lsm_volume_writer_finish(&w, 1.0, LSM_NIFTI_DIM_MAX + 1, &err), LSM_ERR_IO);
+  assert_null(w);
+
+  unsigned char h[LSM_NIFTI_HEADER_BYTES];
+  lsm_volume_info info = {2, 2, LSM_NIFTI_DIM_MAX, 1, 1, 1, 0, 0, 0, LSM_VALUES_SDF};
+  assert_int_equal(lsm_nifti_header(h, sizeof h, &info), LSM_NIFTI_HEADER_BYTES);
+  assert_int_equal(lsm_nifti_header(h, sizeof h - 1, &info), 0);
+  info.nz = LSM_NIFTI_DIM_MAX + 1;
+  assert_int_equal(lsm_nifti_header(h, sizeof h, &info), 0);
+  info.nz = 1;
+  info.ny = LSM_NIFTI_DIM_MAX + 1;
+  assert_int_equal(lsm_nifti_header(h, sizeof h, &info), 0);
+
+  unsigned formats = 0;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_format_list_parse("nii,nrrd", &formats, &err), LSM_OK);
+  assert_int_equal(formats, LSM_FORMAT_NII | LSM_FORMAT_NRRD);
+  assert_string_equal(lsm_format_name(LSM_FORMAT_NII), "nii");
+  const char *names[8];
+  assert_int_equal(lsm_volume_file_names(LSM_FORMAT_ALL, names, 8), 7);
+  assert_int_equal(lsm_volume_file_names(LSM_FORMAT_NII, names, 8), 1);
+  assert_string_equal(names[0], "volume.nii");
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_format_list_parse("nifti", &formats, &err), LSM_ERR_USAGE);
+  assert_msg_contains(err, "nii");
+}
+
 /* lsm_json_find_number: a member path through any valid formatting; invalid
  * JSON is refused wherever it breaks, not only on the way to the member. */
 static void test_json_find_number(void **state) {
@@ -1159,6 +1293,8 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_nrrd_roundtrip, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_nrrd_fixed_header, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_nrrd_errors, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_nifti_header_fields, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_nifti_limits, setup_tmp, teardown_tmp),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
