@@ -6,6 +6,8 @@
 # (tests/formats_check.py, run with Debian's /usr/bin/python3):
 #   - VTK opens volume.nrrd, volume.mha and volume.vtk with the same values as
 #     volume.raw (+ volume.json) and the right dimensions, spacing and origin
+#   - VTK's NIfTI reader and nibabel open volume.nii with the same values and
+#     its affine diag(-sx, -sy, sz) + (0, 0, z0)
 #   - OpenImageIO (oiiotool, iinfo) reads every exr/NNNNN.exr with the same
 #     values, one channel, pixelSize and sliceHeight attributes
 #   - VTK's flying edges at 0 encloses the ball's volume within 4 %
