@@ -1,7 +1,9 @@
 # Shared by the shell test suites: sourced after SUITE (the name in messages)
 # is set.  Counters, ok/bad/check, finish (prints "SUITE: N passed, N failed"
-# and exits 0 only when nothing failed), need (programs that must exist) and
-# make_tmp (a temporary folder $TMP removed on exit).
+# and exits 0 only when nothing failed), need (programs that must exist),
+# need_python (modules Debian's Python must import), run_checks (a helper
+# printing "ok - " / "FAIL - " lines, counted) and make_tmp (a temporary folder
+# $TMP removed on exit).
 
 pass=0
 fail=0
@@ -27,4 +29,24 @@ make_tmp() { # sets TMP to a new folder, removed on exit (a suite may replace th
   TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-$SUITE.XXXXXX") || exit 1
   trap 'rm -rf "$TMP"' EXIT
   trap 'exit 1' INT TERM
+}
+need_python() { # need_python MODULES PACKAGES: ends the suite when $PY cannot import them
+  "$PY" -c "import $1" 2>/dev/null || { bad "$PY cannot import $1 (Debian packages $2)"; finish; }
+}
+run_checks() { # run_checks LOG COMMAND...: runs a checker whose lines are "ok - ..." or
+  # "FAIL - ...", counts them and prints the failures; a checker that exits non-zero
+  # without a FAIL line fails once
+  log=$1
+  shift
+  "$@" >"$log" 2>&1
+  rc=$?
+  grep '^FAIL - ' "$log" | sed "s/^FAIL - /$SUITE: FAIL: /"
+  p=$(grep -c '^ok - ' "$log")
+  f=$(grep -c '^FAIL - ' "$log")
+  pass=$((pass + p))
+  fail=$((fail + f))
+  if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then
+    bad "$1 exited with $rc:"
+    tail -5 "$log"
+  fi
 }

@@ -24,26 +24,10 @@ PY=/usr/bin/python3
 HELPER="$(dirname "$0")/formats_check.py"
 SUITE=formats
 . "$(dirname "$0")/harness.sh"
-# run_checks LOG COMMAND...: runs a formats_check.py check, counts its lines.
-run_checks() {
-  log=$1
-  shift
-  "$@" >"$log" 2>&1
-  rc=$?
-  grep '^FAIL - ' "$log" | sed 's/^FAIL - /formats: FAIL: /'
-  p=$(grep -c '^ok - ' "$log")
-  f=$(grep -c '^FAIL - ' "$log")
-  pass=$((pass + p))
-  fail=$((fail + f))
-  if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then
-    bad "formats_check.py exited with $rc:"
-    tail -5 "$log"
-  fi
-}
 
 need "$LSM"
 [ -x "$PY" ] || { bad "$PY is missing (Debian package python3)"; finish; }
-"$PY" -c 'import vtk, numpy, nibabel' 2>/dev/null || { bad "$PY cannot import vtk, numpy and nibabel (Debian packages python3-vtk9, python3-numpy, python3-nibabel)"; finish; }
+need_python "vtk, numpy, nibabel" "python3-vtk9, python3-numpy, python3-nibabel"
 command -v oiiotool >/dev/null 2>&1 && command -v iinfo >/dev/null 2>&1 ||
   { bad "oiiotool / iinfo are missing (Debian package openimageio-tools)"; finish; }
 

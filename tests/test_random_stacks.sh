@@ -15,16 +15,8 @@ PY=/usr/bin/python3
 SUITE=random-stacks
 . "$(dirname "$0")/harness.sh"
 need "$LSM"
-"$PY" -c 'import numpy' 2>/dev/null || { bad "$PY cannot import numpy (Debian package python3-numpy)"; finish; }
+need_python numpy python3-numpy
 make_tmp
 case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
-"$PY" "$(dirname "$0")/random_stacks.py" "$LSM" "$TMP" 100 1000 64 >"$TMP/log" 2>&1
-rc=$?
-grep '^FAIL - ' "$TMP/log" | sed "s/^FAIL - /$SUITE: FAIL: /"
-pass=$(grep -c '^ok - ' "$TMP/log")
-fail=$(grep -c '^FAIL - ' "$TMP/log")
-if [ "$rc" -ne 0 ] && [ "$fail" -eq 0 ]; then
-  bad "random_stacks.py exited with $rc:"
-  tail -5 "$TMP/log"
-fi
+run_checks "$TMP/log" "$PY" "$(dirname "$0")/random_stacks.py" "$LSM" "$TMP" 100 1000 64
 finish

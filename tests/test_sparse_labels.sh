@@ -12,7 +12,7 @@ PY=/usr/bin/python3
 SUITE=sparse-labels
 . "$(dirname "$0")/harness.sh"
 need "$LSM"
-"$PY" -c 'import nibabel, numpy' 2>/dev/null || { bad "$PY cannot import nibabel and numpy (python3-nibabel, python3-numpy)"; finish; }
+need_python "nibabel, numpy" "python3-nibabel, python3-numpy"
 make_tmp
 case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
 SCRIPT="$(cd "$(dirname "$0")/.." && pwd)/examples/sparse_labels.py"
@@ -71,20 +71,13 @@ rep(dice >= min_dice, "Dice over the volume %.4f >= %g" % (dice, min_dice))
 PYEOF
 }
 
-run_checks() {
-  "$@" >"$TMP/log" 2>&1
-  grep '^FAIL - ' "$TMP/log" | sed "s/^FAIL - /$SUITE: FAIL: /"
-  pass=$((pass + $(grep -c '^ok - ' "$TMP/log")))
-  fail=$((fail + $(grep -c '^FAIL - ' "$TMP/log")))
-}
-
 # ---- slices across axis 2, found by the script (the label is present) --------------------------
 make 2 4 "$TMP/z.nii.gz"
 "$PY" "$SCRIPT" "$TMP/z.nii.gz" "$TMP/z-out.nii.gz" --label 3 --lsmorph "$LSM" -- -q >"$TMP/o" 2>"$TMP/e"
 rc=$?
 check "axis 2: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
 check "axis 2: says what it filled" grep -q "drawn slices .* along axis 2" "$TMP/o"
-[ $rc -eq 0 ] && run_checks verify "$TMP/z.nii.gz" "$TMP/z-out.nii.gz" 2 4 0.99
+[ $rc -eq 0 ] && run_checks "$TMP/log" verify "$TMP/z.nii.gz" "$TMP/z-out.nii.gz" 2 4 0.99
 
 # ---- across axis 0 (its spacing is the largest), with --slices ----------------------------------
 make 0 5 "$TMP/x.nii"
@@ -92,7 +85,7 @@ make 0 5 "$TMP/x.nii"
 rc=$?
 check "axis 0, --slices: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
 check "axis 0 chosen by the spacing" grep -q "along axis 0" "$TMP/o"
-[ $rc -eq 0 ] && run_checks verify "$TMP/x.nii" "$TMP/x-out.nii" 0 5 0.99
+[ $rc -eq 0 ] && run_checks "$TMP/log" verify "$TMP/x.nii" "$TMP/x-out.nii" 0 5 0.99
 
 # ---- refusals -------------------------------------------------------------------------------------
 expect_fail() { # DESC RC PHRASE ARGS...
