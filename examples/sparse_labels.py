@@ -111,6 +111,9 @@ def main():
     ap.add_argument("--keep", default=None, help="keep lsmorph's input and output in this folder")
     args = ap.parse_args(argv)
 
+    value = args.label if args.label is not None else 1
+    if not 0 < value < 256:
+        fail("--label %d does not fit the uint8 output (1 .. 255)" % value, 2)
     try:
         import nibabel
     except ImportError:
@@ -162,9 +165,6 @@ def main():
             fail("lsmorph wrote %d slices, expected %d (slices %d .. %d)"
                  % (nz, picked[-1] - picked[0] + 1, picked[0], picked[-1]))
         result = np.zeros(stack.shape, np.uint8)
-        value = args.label if args.label is not None else 1
-        if not 0 < value < 256:
-            fail("--label %d does not fit the uint8 output" % value, 2)
         result[picked[0]:picked[-1] + 1] = np.where(filled.transpose(0, 2, 1) == 255, value, 0)
         header = image.header.copy()
         header.set_data_dtype(np.uint8)
