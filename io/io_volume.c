@@ -6,6 +6,8 @@
  *   vtk   volume.vtk   legacy VTK header (io_vtk.c) + samples, big endian
  *   raw   volume.raw   samples only, little endian; volume.json at the end
  *   nii   volume.nii   NIfTI-1 header (io_nifti.c) + samples, little endian
+ *   nii.gz volume.nii.gz the same through io_gzip.c (header stored, samples
+ *                      deflated; the header is rewritten in place at the end)
  *   exr   exr/NNNNN.exr one OpenEXR file per slice (io_exr.c)
  *
  * Each slice is converted once per sample encoding and appended to every file
@@ -45,7 +47,8 @@ static const format_entry formats_known[] = {{LSM_FORMAT_NRRD, "nrrd"},
                                               {LSM_FORMAT_VTK, "vtk"},
                                               {LSM_FORMAT_EXR, "exr"},
                                               {LSM_FORMAT_RAW, "raw"},
-                                              {LSM_FORMAT_NII, "nii"}};
+                                              {LSM_FORMAT_NII, "nii"},
+                                              {LSM_FORMAT_NII_GZ, "nii.gz"}};
 #define FORMAT_COUNT (sizeof formats_known / sizeof formats_known[0])
 
 const char *lsm_format_name(unsigned format) {
@@ -69,7 +72,7 @@ lsm_status lsm_format_list_parse(const char *list, unsigned *formats, lsm_err *e
       if (len == 0)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--format: empty name in '%s'", list);
       return lsm_fail(err, LSM_ERR_USAGE, NULL,
-                      "--format: '%.*s' is not one of nrrd, mha, vtk, nii, exr, raw", (int)(len > 64 ? 64 : len), p);
+                      "--format: '%.*s' is not one of nrrd, mha, vtk, nii, nii.gz, exr, raw", (int)(len > 64 ? 64 : len), p);
     }
     set |= bit;
     if (!end) break;
@@ -85,7 +88,7 @@ size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap) {
     const char *file;
   } files[] = {{LSM_FORMAT_NRRD, "volume.nrrd"}, {LSM_FORMAT_MHA, "volume.mha"},
                {LSM_FORMAT_VTK, "volume.vtk"},   {LSM_FORMAT_NII, "volume.nii"},
-               {LSM_FORMAT_RAW, "volume.raw"},
+               {LSM_FORMAT_NII_GZ, "volume.nii.gz"}, {LSM_FORMAT_RAW, "volume.raw"},
                {LSM_FORMAT_RAW, "volume.json"},  {LSM_FORMAT_EXR, "exr/"}};
   size_t n = 0;
   for (size_t k = 0; k < sizeof files / sizeof files[0]; ++k) {
@@ -114,19 +117,25 @@ typedef struct vol_stream {
   size_t header_bytes;   /* fixed header length (0: raw) */
   sample_enc enc;
   lsm_nrrd_writer *nrrd; /* float NRRD goes through io_nrrd.c */
+  lsm_gzip_writer *gz;   /* volume.nii.gz goes through io_gzip.c */
 } vol_stream;
 
 struct lsm_volume_writer {
   char *dir;
   unsigned formats;
   lsm_volume_info info;
-  vol_stream streams[5];
+  vol_stream streams[6];
   int nstreams;
   size_t samples;                 /* nx * ny */
   unsigned char *buf[ENC_COUNT];  /* one converted slice per encoding in use */
   size_t slices;
   int failed;                     /* a write failed: finish refuses */
 };
+
+/* The NIfTI file named in a limit message. */
+static const char *nifti_file(unsigned formats) {
+  return (formats & LSM_FORMAT_NII) ? "volume.nii" : "volume.nii.gz";
+}
 
 static int finite_positive(double v) { return isfinite(v) && v > 0.0; }
 
@@ -146,12 +155,15 @@ static size_t stream_header(const vol_stream *s, const lsm_volume_info *info, ch
   case LSM_FORMAT_NRRD: return nrrd_u8_header(out, cap, info);
   case LSM_FORMAT_MHA: return lsm_mha_header(out, cap, info);
   case LSM_FORMAT_VTK: return lsm_vtk_header(out, cap, info);
-  case LSM_FORMAT_NII: return lsm_nifti_header((unsigned char *)out, cap, info);
+  case LSM_FORMAT_NII:
+  case LSM_FORMAT_NII_GZ: return lsm_nifti_header((unsigned char *)out, cap, info);
   default: return 0;
   }
 }
 
 #define HEADER_CAP 2048
+/* zlib level of volume.nii.gz: 1, as nibabel writes; see README (speed and size) */
+#define NII_GZ_LEVEL 1
 
 static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *err) {
   vol_stream *s = &w->streams[w->nstreams];
@@ -162,7 +174,8 @@ static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *er
                      : format == LSM_FORMAT_MHA ? "volume.mha"
                      : format == LSM_FORMAT_VTK ? "volume.vtk"
                      : format == LSM_FORMAT_NII ? "volume.nii"
-                                                : "volume.raw";
+                     : format == LSM_FORMAT_NII_GZ ? "volume.nii.gz"
+                                                   : "volume.raw";
   s->enc = mask ? ENC_U8 : format == LSM_FORMAT_VTK ? ENC_F32_BE : ENC_F32_LE;
   s->path = join_path(w->dir, name);
   if (!s->path) return lsm_fail(err, LSM_ERR_NOMEM, w->dir, "cannot allocate a file name");
@@ -177,6 +190,9 @@ static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *er
     if (s->header_bytes == 0)
       return lsm_fail(err, LSM_ERR_INTERNAL, s->path, "header does not fit in %d bytes", HEADER_CAP);
   }
+  if (format == LSM_FORMAT_NII_GZ)
+    return lsm_gzip_writer_open(s->path, (const unsigned char *)header, s->header_bytes,
+                                NII_GZ_LEVEL, &s->gz, err);
   s->fp = fopen(s->path, "wb");
   if (!s->fp) return lsm_fail(err, LSM_ERR_IO, s->path, "cannot create: %s", strerror(errno));
   if (s->header_bytes && fwrite(header, 1, s->header_bytes, s->fp) != s->header_bytes)
@@ -194,10 +210,10 @@ lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values 
   if (values != LSM_VALUES_SDF && values != LSM_VALUES_MASK)
     return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad value kind %d", (int)values);
   LSM_TRY(lsm_volume_check_geometry(dir, nx, ny, sx, sy, sz, ox, oy, oz, err));
-  if ((formats & LSM_FORMAT_NII) && (nx > LSM_NIFTI_DIM_MAX || ny > LSM_NIFTI_DIM_MAX))
+  if ((formats & LSM_FORMATS_NIFTI) && (nx > LSM_NIFTI_DIM_MAX || ny > LSM_NIFTI_DIM_MAX))
     return lsm_fail(err, LSM_ERR_LIMIT, dir,
-                    "volume.nii: NIfTI-1 holds at most %d samples along an axis, the slices are "
-                    "%dx%d (choose another --format)", LSM_NIFTI_DIM_MAX, nx, ny);
+                    "%s: NIfTI-1 holds at most %d samples along an axis, the slices are "
+                    "%dx%d (choose another --format)", nifti_file(formats), LSM_NIFTI_DIM_MAX, nx, ny);
   const size_t bytes = (size_t)nx * (size_t)ny * 4;
 
   lsm_volume_writer *w = calloc(1, sizeof *w);
@@ -225,7 +241,7 @@ lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values 
 
   lsm_status st = LSM_OK;
   static const unsigned order[] = {LSM_FORMAT_NRRD, LSM_FORMAT_MHA, LSM_FORMAT_VTK,
-                                   LSM_FORMAT_NII, LSM_FORMAT_RAW};
+                                   LSM_FORMAT_NII, LSM_FORMAT_NII_GZ, LSM_FORMAT_RAW};
   for (size_t k = 0; st == LSM_OK && k < sizeof order / sizeof order[0]; ++k)
     if (formats & order[k]) st = stream_open(w, order[k], err);
   for (int k = 0; st == LSM_OK && k < w->nstreams; ++k) {
@@ -285,11 +301,11 @@ lsm_status lsm_volume_writer_write_slice(lsm_volume_writer *w, const float *phi,
   if (!w || !phi)
     return lsm_fail(err, LSM_ERR_INTERNAL, w ? w->dir : NULL, "bad arguments to write a slice");
   if (w->failed) return lsm_fail(err, LSM_ERR_IO, w->dir, "an earlier write failed");
-  if ((w->formats & LSM_FORMAT_NII) && w->slices >= LSM_NIFTI_DIM_MAX) {
+  if ((w->formats & LSM_FORMATS_NIFTI) && w->slices >= LSM_NIFTI_DIM_MAX) {
     w->failed = 1;
     return lsm_fail(err, LSM_ERR_LIMIT, w->dir,
-                    "volume.nii: NIfTI-1 holds at most %d slices, and a slice more came "
-                    "(choose another --format)", LSM_NIFTI_DIM_MAX);
+                    "%s: NIfTI-1 holds at most %d slices, and a slice more came "
+                    "(choose another --format)", nifti_file(w->formats), LSM_NIFTI_DIM_MAX);
   }
   int done[ENC_COUNT] = {0};
   for (int k = 0; k < w->nstreams; ++k) {
@@ -303,7 +319,9 @@ lsm_status lsm_volume_writer_write_slice(lsm_volume_writer *w, const float *phi,
         done[s->enc] = 1;
       }
       size_t bytes = s->enc == ENC_U8 ? w->samples : 4 * w->samples;
-      if (fwrite(w->buf[s->enc], 1, bytes, s->fp) != bytes)
+      if (s->gz)
+        st = lsm_gzip_writer_write(s->gz, w->buf[s->enc], bytes, err);
+      else if (fwrite(w->buf[s->enc], 1, bytes, s->fp) != bytes)
         st = lsm_fail(err, LSM_ERR_IO, s->path, "write failed: %s", strerror(errno));
     }
     if (st != LSM_OK) {
@@ -338,9 +356,12 @@ static lsm_status stream_finish(vol_stream *s, const lsm_volume_info *info, lsm_
     if (len != s->header_bytes)
       st = lsm_fail(err, LSM_ERR_INTERNAL, s->path, "header length changed (%zu, was %zu bytes)",
                     len, s->header_bytes);
+    else if (s->gz)
+      st = lsm_gzip_writer_finish(&s->gz, (const unsigned char *)header, err);
     else if (fseek(s->fp, 0, SEEK_SET) != 0 || fwrite(header, 1, len, s->fp) != len)
       st = lsm_fail(err, LSM_ERR_IO, s->path, "write failed: %s", strerror(errno));
   }
+  if (s->gz || !s->fp) return st; /* gzip: finished (or left for abort) above */
   if (st == LSM_OK && (fflush(s->fp) != 0 || ferror(s->fp)))
     st = lsm_fail(err, LSM_ERR_IO, s->path, "write failed: %s", strerror(errno));
   int closed = fclose(s->fp);
@@ -396,6 +417,7 @@ void lsm_volume_writer_abort(lsm_volume_writer **wp) {
   for (int k = 0; k < w->nstreams; ++k) {
     vol_stream *s = &w->streams[k];
     lsm_nrrd_abort(&s->nrrd);
+    lsm_gzip_writer_abort(&s->gz);
     if (s->fp) fclose(s->fp);
     free(s->path);
   }

@@ -7,7 +7,8 @@
  *   io_volume.c   streaming writer for every selected volume format at once
  *   io_mha.c      MetaImage header (volume.mha)
  *   io_vtk.c      legacy VTK header (volume.vtk)
- *   io_nifti.c    NIfTI-1 header (volume.nii)
+ *   io_nifti.c    NIfTI-1 header (volume.nii, volume.nii.gz)
+ *   io_gzip.c     streaming gzip whose first bytes are rewritten at the end
  *   io_raw.c      JSON sidecar of volume.raw
  *   io_json.c     JSON strings and numbers (run.json, scores, volume.json)
  *   io_exr.c      one OpenEXR file per slice (OpenEXRCore C API)
@@ -158,7 +159,9 @@ lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t
 #define LSM_FORMAT_EXR 0x08u  /* exr/00001.exr ...: one OpenEXR scanline file per slice */
 #define LSM_FORMAT_RAW 0x10u  /* volume.raw + volume.json sidecar, little endian */
 #define LSM_FORMAT_NII 0x20u  /* volume.nii: NIfTI-1 single file, little endian */
-#define LSM_FORMAT_ALL 0x3fu
+#define LSM_FORMAT_NII_GZ 0x40u /* volume.nii.gz: the same, gzip compressed */
+#define LSM_FORMAT_ALL 0x7fu
+#define LSM_FORMATS_NIFTI (LSM_FORMAT_NII | LSM_FORMAT_NII_GZ) /* 16-bit sizes */
 
 /* What the volume holds: the signed distance (float32, physical units,
  * negative inside) or a mask (uint8, 255 where phi <= 0, else 0; in EXR
@@ -174,12 +177,12 @@ const char *lsm_values_name(lsm_values v);
 lsm_values lsm_values_from_name(const char *name);
 /* Name of one format bit ("nrrd"), or "unknown". */
 const char *lsm_format_name(unsigned format);
-/* Parses a comma-separated list ("nrrd,mha,vtk,exr,raw,nii", any order, repeats
+/* Parses a comma-separated list ("nrrd,mha,vtk,exr,raw,nii,nii.gz", any order, repeats
  * allowed) into a set of LSM_FORMAT_* bits; LSM_ERR_USAGE on an empty list or
  * an unknown name. */
 lsm_status lsm_format_list_parse(const char *list, unsigned *formats, lsm_err *err);
 /* The names, relative to the output folder, of the files (folders end in '/')
- * the given formats write, in a fixed order; returns how many (at most 7),
+ * the given formats write, in a fixed order; returns how many (at most 8),
  * storing at most cap of them in names. */
 size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap);
 
@@ -213,6 +216,29 @@ size_t lsm_vtk_header(char *out, size_t cap, const lsm_volume_info *info);
 #define LSM_NIFTI_HEADER_BYTES 352
 #define LSM_NIFTI_DIM_MAX 32767
 size_t lsm_nifti_header(unsigned char *out, size_t cap, const lsm_volume_info *info);
+
+/* ---- gzip with a rewritable head (io_gzip.c) ------------------------------ */
+
+/* A gzip file (RFC 1952, one member) written as a stream, whose first
+ * head_bytes uncompressed bytes (at most 65535) are kept in a stored deflate
+ * block at byte LSM_GZIP_HEAD_OFFSET of the file, so that finish can replace
+ * them with a head of the same length (volume.nii.gz's header, with the slice
+ * count known only at the end); the rest is deflated at level (0..9).  Memory:
+ * zlib's state and a 64 KiB buffer. */
+#define LSM_GZIP_HEAD_OFFSET 15
+typedef struct lsm_gzip_writer lsm_gzip_writer;
+lsm_status lsm_gzip_writer_open(const char *path, const unsigned char *head, size_t head_bytes,
+                                int level, lsm_gzip_writer **out, lsm_err *err);
+/* Compresses and appends bytes after the head. */
+lsm_status lsm_gzip_writer_write(lsm_gzip_writer *g, const void *data, size_t bytes,
+                                 lsm_err *err);
+/* Ends the deflate stream, writes the trailer, puts head (head_bytes long, as
+ * at open) in place of the provisional one, closes the file (checking every
+ * write and the close) and frees the writer. */
+lsm_status lsm_gzip_writer_finish(lsm_gzip_writer **g, const unsigned char *head,
+                                  lsm_err *err);
+/* Closes and frees without finishing (after an error); harmless on NULL. */
+void lsm_gzip_writer_abort(lsm_gzip_writer **g);
 
 /* ---- JSON ---------------------------------------------------------------- */
 
@@ -258,7 +284,7 @@ typedef struct lsm_volume_writer lsm_volume_writer;
 
 /* Creates dir/volume.<ext> for each selected format (and dir/exr/ for EXR)
  * for nx x ny slices with pixel spacings sx, sy, provisional slice spacing
- * sz and first-sample origin (ox, oy, oz).  With LSM_FORMAT_NII, nx and ny
+ * sz and first-sample origin (ox, oy, oz).  With LSM_FORMAT_NII or _NII_GZ, nx and ny
  * above LSM_NIFTI_DIM_MAX are refused here (LSM_ERR_LIMIT) and a slice past
  * that count by lsm_volume_writer_write_slice. */
 lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values values, int nx,

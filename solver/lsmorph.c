@@ -732,19 +732,21 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                       w, h, (unsigned long long)canvas, lsm_align_name(cli->stack.align),
                       (unsigned long long)cli->max_pixels);
   }
-  if ((cli->formats & LSM_FORMAT_NII) && (w > LSM_NIFTI_DIM_MAX || h > LSM_NIFTI_DIM_MAX))
+  const char *nifti = (cli->formats & LSM_FORMAT_NII) ? "volume.nii" : "volume.nii.gz";
+  if ((cli->formats & LSM_FORMATS_NIFTI) && (w > LSM_NIFTI_DIM_MAX || h > LSM_NIFTI_DIM_MAX))
     return lsm_fail(err, LSM_ERR_LIMIT, src->paths[0],
-                    "%dx%d slices do not fit volume.nii: NIfTI-1 holds at most %d samples along "
-                    "an axis (choose another --format)", w, h, LSM_NIFTI_DIM_MAX);
+                    "%dx%d slices do not fit %s: NIfTI-1 holds at most %d samples along "
+                    "an axis (choose another --format)", w, h, nifti, LSM_NIFTI_DIM_MAX);
   if (!cli->stack.per_iteration) {
     const double dz = lsm_stack_output_dz(&cli->stack);
     const size_t count = lsm_stack_output_count(z, src->count, dz);
     const double slices = (double)count;
-    if ((cli->formats & LSM_FORMAT_NII) && count > LSM_NIFTI_DIM_MAX)
+    if ((cli->formats & LSM_FORMATS_NIFTI) && count > LSM_NIFTI_DIM_MAX)
       return lsm_fail(err, LSM_ERR_LIMIT, cli->heights_file ? cli->heights_file : cli->slice_dir,
-                      "the output would have %s%zu slices, more than the %d volume.nii holds "
+                      "the output would have %s%zu slices, more than the %d %s holds "
                       "(NIfTI-1 sizes are 16-bit: raise --dz or choose another --format)",
-                      count >= LSM_OUTPUT_COUNT_MAX ? "at least " : "", count, LSM_NIFTI_DIM_MAX);
+                      count >= LSM_OUTPUT_COUNT_MAX ? "at least " : "", count, LSM_NIFTI_DIM_MAX,
+                      nifti);
     const double voxels = slices * (double)w * (double)h;
     if (!(voxels <= (double)cli->max_voxels))
       return lsm_fail(err, LSM_ERR_LIMIT, cli->heights_file ? cli->heights_file : cli->slice_dir,

@@ -84,41 +84,43 @@ def close(a, b, tol=1e-9):
     return all(abs(x - y) <= tol * max(1.0, abs(x), abs(y)) for x, y in zip(a, b))
 
 
-def check_nifti(out, vtk, vtk_to_numpy, raw, dims, spacing, z0, mask):
-    """volume.nii through two independent readers: VTK's vtkNIFTIImageReader and nibabel.
-    Both must give volume.raw's samples; nibabel's affine must be diag(-sx, -sy, sz) with
-    offset (0, 0, z0) (RAS, so that ITK's LPS gets the identity, as for volume.nrrd)."""
+def check_nifti(out, name, vtk, vtk_to_numpy, raw, dims, spacing, z0, mask):
+    """volume.nii or volume.nii.gz (name) through two independent readers: VTK's
+    vtkNIFTIImageReader and nibabel (which inflate .gz themselves, VTK through zlib, nibabel
+    through Python's gzip).  Both must give volume.raw's samples; nibabel's affine must be
+    diag(-sx, -sy, sz) with offset (0, 0, z0) (RAS, so that ITK's LPS gets the identity, as
+    for volume.nrrd)."""
     import numpy as np
-    path = os.path.join(out, "volume.nii")
+    path = os.path.join(out, name)
     r = vtk.vtkNIFTIImageReader()
     r.SetFileName(path)
     r.Update()
     im = r.GetOutput()
     scal = im.GetPointData().GetScalars() if im and im.GetPointData() else None
     if report(scal is not None and im.GetDimensions() == dims,
-              "VTK reads volume.nii: dimensions %s (want %s)" % (im.GetDimensions() if im else None, dims)):
+              "VTK reads %s: dimensions %s (want %s)" % (name, im.GetDimensions() if im else None, dims)):
         a = vtk_to_numpy(scal)
-        report(close(im.GetSpacing(), spacing, 1e-6), "volume.nii spacing %s == %s (VTK)" % (im.GetSpacing(), spacing))
+        report(close(im.GetSpacing(), spacing, 1e-6), "%s spacing %s == %s (VTK)" % (name, im.GetSpacing(), spacing))
         report(a.dtype == (np.uint8 if mask else np.float32) and np.array_equal(a, raw),
-               "volume.nii has the same values as volume.raw (VTK, %s)" % a.dtype)
+               "%s has the same values as volume.raw (VTK, %s)" % (name, a.dtype))
         q = r.GetQFormMatrix()
         qm = [[q.GetElement(i, j) for j in range(4)] for i in range(3)] if q else None
         want = [[-1, 0, 0, 0], [0, -1, 0, 0], [0, 0, 1, z0]]
         report(qm is not None and all(close(qm[i], want[i], 1e-6) for i in range(3)),
-               "volume.nii qform (VTK) %s == %s" % (qm, want))
+               "%s qform (VTK) %s == %s" % (name, qm, want))
     import nibabel
     img = nibabel.load(path)
     data = np.asarray(img.dataobj)
     report(data.shape == dims and data.dtype == (np.uint8 if mask else np.float32),
-           "nibabel reads volume.nii: shape %s, %s" % (data.shape, data.dtype))
+           "nibabel reads %s: shape %s, %s" % (name, data.shape, data.dtype))
     report(data.shape == dims and np.array_equal(data.ravel(order="F"), raw),
-           "volume.nii has the same values as volume.raw (nibabel)")
+           "%s has the same values as volume.raw (nibabel)" % name)
     sx, sy, sz = spacing
     want = np.array([[-sx, 0, 0, 0], [0, -sy, 0, 0], [0, 0, sz, z0], [0, 0, 0, 1]])
-    for name, (aff, code) in (("sform", img.header.get_sform(coded=True)),
+    for form, (aff, code) in (("sform", img.header.get_sform(coded=True)),
                               ("qform", img.header.get_qform(coded=True))):
         report(aff is not None and int(code) == 1 and np.allclose(aff, want, rtol=1e-6, atol=1e-6 * abs(z0)),
-               "volume.nii %s (nibabel, code %s) == diag(-sx, -sy, sz) + (0, 0, z0)" % (name, code))
+               "%s %s (nibabel, code %s) == diag(-sx, -sy, sz) + (0, 0, z0)" % (name, form, code))
 
 
 def check(args):
@@ -173,7 +175,9 @@ def check(args):
         report(a.shape == raw.shape and np.array_equal(a, raw),
                "volume.%s has the same values as volume.raw" % fmt)
     vol = raw.reshape(nz, ny, nx)
-    check_nifti(out, vtk, vtk_to_numpy, raw, (nx, ny, nz), spacing, heights[0], mask)
+    for name in ("volume.nii", "volume.nii.gz"):
+        if report(os.path.exists(os.path.join(out, name)), "%s written" % name):
+            check_nifti(out, name, vtk, vtk_to_numpy, raw, (nx, ny, nz), spacing, heights[0], mask)
     if mask:
         report(set(np.unique(vol).tolist()) <= {0, 255}, "mask values are 0 and 255")
 
@@ -253,7 +257,8 @@ def check(args):
         report(ok, "%s is an RGB picture with content" % name)
     run = json.load(open(os.path.join(out, "run.json")))
     files_listed = run.get("output", {}).get("files", [])
-    report(all(f in files_listed for f in ("volume.nrrd", "volume.mha", "volume.vtk", "volume.nii", "volume.raw",
+    report(all(f in files_listed for f in ("volume.nrrd", "volume.mha", "volume.vtk", "volume.nii",
+                                             "volume.nii.gz", "volume.raw",
                                              "volume.json", "exr/", "preview.png", "preview3d.png")),
            "run.json output files %s" % files_listed)
 

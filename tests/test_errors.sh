@@ -157,11 +157,15 @@ expect "--max-voxels, per iteration" 1 "good: 2 output slices of 32x32 written; 
   reconstruct good -o out -q --per-iteration --max-voxels 3000
 expect "2e13 output slices" 1 "the output would have 2e+13 slices of 32x32" out reconstruct good -o out -q --spacing 1e10 --dz 1e-3
 # NIfTI-1 sizes are 16-bit: refused before the run, not after it
-expect "--format nii, slices wider than 32767" 1 "wide/1.png: 32800x1 slices do not fit volume.nii" out \
+expect "--format nii, slices wider than 32767" 1 "wide/1.png: 32800x1 slices do not fit volume.nii:" out \
   reconstruct wide -o out -q --format nrrd,nii
+expect "--format nii.gz, slices wider than 32767" 1 "wide/1.png: 32800x1 slices do not fit volume.nii.gz:" out \
+  reconstruct wide -o out -q --format nii.gz
 expect "--format nii, 40001 output slices" 1 "good: the output would have 40001 slices, more than the 32767 volume.nii holds" \
   out reconstruct good -o out -q --format nii --spacing 2 --dz 1e-4
-expect "--format nifti" 2 "--format: 'nifti' is not one of nrrd, mha, vtk, nii, exr, raw" out reconstruct good -o out --format nifti
+expect "--format nii.gz, 40001 output slices" 1 "good: the output would have 40001 slices, more than the 32767 volume.nii.gz holds" \
+  out reconstruct good -o out -q --format nii.gz --spacing 2 --dz 1e-4
+expect "--format nifti" 2 "--format: 'nifti' is not one of nrrd, mha, vtk, nii, nii.gz, exr, raw" out reconstruct good -o out --format nifti
 # a 20000x1 strip: an aligned gap pads each axis by up to half its side, a
 # canvas of up to 40004 x 5 cells, more than 4 x --max-pixels 20000
 expect "aligned canvas of a long strip" 1 "strip/1.png: 20000x1 slices need a working canvas" out \

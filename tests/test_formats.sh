@@ -2,11 +2,11 @@
 # Output formats of lsmorph, checked with real readers:
 #   sh tests/test_formats.sh BUILD_DIR
 # A ball of radius 40 px (128 x 128 x 105 slices) is cut into slices, every 8th
-# is kept and reconstructed with --format nrrd,mha,vtk,nii,exr,raw --mesh; then
+# is kept and reconstructed with --format nrrd,mha,vtk,nii,nii.gz,exr,raw --mesh; then
 # (tests/formats_check.py, run with Debian's /usr/bin/python3):
 #   - VTK opens volume.nrrd, volume.mha and volume.vtk with the same values as
 #     volume.raw (+ volume.json) and the right dimensions, spacing and origin
-#   - VTK's NIfTI reader and nibabel open volume.nii with the same values and
+#   - VTK's NIfTI reader and nibabel open volume.nii and volume.nii.gz with the same values and
 #     its affine diag(-sx, -sy, sz) + (0, 0, z0)
 #   - OpenImageIO (oiiotool, iinfo) reads every exr/NNNNN.exr with the same
 #     values, one channel, pixelSize and sliceHeight attributes
@@ -58,10 +58,10 @@ CX=63.3
 CY=64.6
 CZ=52.4
 check "ball slices written" "$PY" "$HELPER" ball "$TMP/ball" 128 105 8 $R $CX $CY $CZ
-"$LSM" reconstruct "$TMP/ball" -o "$TMP/out" --spacing 8 --format nrrd,mha,vtk,nii,exr,raw --mesh -q \
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/out" --spacing 8 --format nrrd,mha,vtk,nii,nii.gz,exr,raw --mesh -q \
   >"$TMP/log" 2>&1
 rc=$?
-check "reconstruct --format nrrd,mha,vtk,nii,exr,raw --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+check "reconstruct --format nrrd,mha,vtk,nii,nii.gz,exr,raw --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
   check "nothing printed with -q" [ ! -s "$TMP/log" ]
   run_checks "$TMP/check1" "$PY" "$HELPER" check "$TMP/out" --spacing 1 1 1 --values sdf \
@@ -78,7 +78,7 @@ fi
 n_ball=$(ls "$TMP/ball"/*.png | wc -l)
 awk -v n="$n_ball" 'BEGIN { for (k = 0; k < n; ++k) print 5.5 + 4 * k }' >"$TMP/heights55.txt"
 "$LSM" reconstruct "$TMP/ball" -o "$TMP/mask" --heights "$TMP/heights55.txt" --pixel-size 0.5 --dz 1 \
-  --values mask --format raw,exr,vtk,nii,mha,nrrd -q >"$TMP/log" 2>&1
+  --values mask --format raw,exr,vtk,nii.gz,nii,mha,nrrd -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --values mask exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -92,7 +92,7 @@ fi
 # are not symmetric, so no two input slices are equal)
 check "per-iteration slices written" "$PY" "$HELPER" ball "$TMP/pi" 64 41 8 24 31.5 32.2 18.7
 "$LSM" reconstruct "$TMP/pi" -o "$TMP/piout" --spacing 8 --pixel-size 0.5 --per-iteration \
-  --format nrrd,mha,vtk,nii,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+  --format nrrd,mha,vtk,nii,nii.gz,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --per-iteration exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -107,7 +107,7 @@ check "--per-iteration --dz 5 gives the same mesh" cmp -s "$TMP/piout/surface.pl
 # ---- outlines: phi is exactly 0 on the contour pixels; the mesh has no degenerate triangles --------
 check "outline slices written" "$PY" "$HELPER" outline "$TMP/pi" "$TMP/pi-outline"
 "$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olout" --input outline --spacing 8 \
-  --format nrrd,mha,vtk,nii,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+  --format nrrd,mha,vtk,nii,nii.gz,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --input outline --mesh exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -126,7 +126,7 @@ fi
 n_pi=$(ls "$TMP/pi-outline"/*.png | wc -l)
 awk -v n="$n_pi" 'BEGIN { for (k = 0; k < n; ++k) print 100000 + 8 * k }' >"$TMP/heights1e5.txt"
 "$LSM" reconstruct "$TMP/pi-outline" -o "$TMP/olfar" --input outline --heights "$TMP/heights1e5.txt" \
-  --format nrrd,mha,vtk,nii,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
+  --format nrrd,mha,vtk,nii,nii.gz,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --input outline --mesh at heights from 1e5 exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
@@ -137,7 +137,7 @@ fi
 "$LSM" reconstruct "$TMP/ball" -o "$TMP/def" --spacing 8 --no-slices -q >/dev/null 2>&1
 check "default run exits 0" [ $? -eq 0 ]
 check "default run writes volume.nrrd" [ -f "$TMP/def/volume.nrrd" ]
-check "default run writes no other volume" sh -c '[ ! -e "$1/volume.mha" ] && [ ! -e "$1/volume.vtk" ] && [ ! -e "$1/volume.nii" ] && [ ! -e "$1/volume.raw" ] && [ ! -e "$1/exr" ]' _ "$TMP/def"
+check "default run writes no other volume" sh -c '[ ! -e "$1/volume.mha" ] && [ ! -e "$1/volume.vtk" ] && [ ! -e "$1/volume.nii" ] && [ ! -e "$1/volume.nii.gz" ] && [ ! -e "$1/volume.raw" ] && [ ! -e "$1/exr" ]' _ "$TMP/def"
 check "default run writes no mesh" [ ! -e "$TMP/def/surface.ply" ]
 check "--no-slices: no slices/ folder" [ ! -e "$TMP/def/slices" ]
 check "default run writes preview.png and preview3d.png" sh -c '[ -f "$1/preview.png" ] && [ -f "$1/preview3d.png" ]' _ "$TMP/def"

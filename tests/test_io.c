@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include "io/lsm_io.h"
 
@@ -1200,12 +1201,177 @@ static void test_nifti_limits(void **state) {
   assert_int_equal(formats, LSM_FORMAT_NII | LSM_FORMAT_NRRD);
   assert_string_equal(lsm_format_name(LSM_FORMAT_NII), "nii");
   const char *names[8];
-  assert_int_equal(lsm_volume_file_names(LSM_FORMAT_ALL, names, 8), 7);
+  assert_int_equal(lsm_volume_file_names(LSM_FORMAT_ALL, names, 8), 8);
   assert_int_equal(lsm_volume_file_names(LSM_FORMAT_NII, names, 8), 1);
   assert_string_equal(names[0], "volume.nii");
   lsm_err_clear(&err);
   assert_int_equal(lsm_format_list_parse("nifti", &formats, &err), LSM_ERR_USAGE);
   assert_msg_contains(err, "nii");
+}
+
+/* ---- gzip with a rewritable head (volume.nii.gz) ------------------------------------- */
+
+/* Inflates a whole gzip file with zlib (any number of members); returns the
+ * bytes (and *len), or NULL when zlib finds the stream broken. */
+static uint8_t *gunzip_bytes(const uint8_t *gz, size_t gz_len, size_t *len) {
+  size_t cap = 1 << 16, n = 0;
+  uint8_t *out = malloc(cap);
+  assert_non_null(out);
+  z_stream z;
+  memset(&z, 0, sizeof z);
+  assert_int_equal(inflateInit2(&z, 16 + MAX_WBITS), Z_OK);
+  z.next_in = (Bytef *)(uintptr_t)gz;
+  z.avail_in = (uInt)gz_len;
+  int r = Z_OK;
+  while (r != Z_STREAM_END) {
+    if (n == cap) {
+      cap *= 2;
+      out = realloc(out, cap);
+      assert_non_null(out);
+    }
+    z.next_out = out + n;
+    z.avail_out = (uInt)(cap - n);
+    r = inflate(&z, Z_NO_FLUSH);
+    n = cap - z.avail_out;
+    if (r != Z_OK && r != Z_STREAM_END) break;
+  }
+  const int whole = r == Z_STREAM_END && z.avail_in == 0; /* one member, nothing after */
+  inflateEnd(&z);
+  if (!whole) {
+    free(out);
+    return NULL;
+  }
+  *len = n;
+  return out;
+}
+
+/* The head written at open is replaced at finish; the file is one plain gzip
+ * member that zlib inflates to the new head and the data, CRC and length
+ * checked by zlib; the head lies uncompressed at LSM_GZIP_HEAD_OFFSET. */
+static void test_gzip_rewritable_head(void **state) {
+  tmp_fixture *f = *state;
+  char path[256];
+  join(path, sizeof path, f->dir, "x.gz");
+  enum { HEAD = 352, DATA = 300000 };
+  unsigned char head0[HEAD], head1[HEAD];
+  uint8_t *data = malloc(DATA);
+  assert_non_null(data);
+  uint32_t seed = 12345u;
+  for (int k = 0; k < HEAD; ++k) {
+    head0[k] = (unsigned char)k;
+    head1[k] = (unsigned char)(255 - k);
+  }
+  for (int k = 0; k < DATA; ++k) { /* half noise (incompressible), half runs */
+    seed = seed * 1664525u + 1013904223u;
+    data[k] = k < DATA / 2 ? (uint8_t)(seed >> 24) : (uint8_t)(k / 1000);
+  }
+  for (int level = 0; level <= 9; level += 9) {
+    lsm_gzip_writer *g = NULL;
+    lsm_err err;
+    lsm_err_clear(&err);
+    assert_int_equal(lsm_gzip_writer_open(path, head0, HEAD, level, &g, &err), LSM_OK);
+    size_t at = 0, step = 1;
+    while (at < DATA) { /* uneven pieces: 1, 3, 9, ... bytes */
+      size_t piece = step < DATA - at ? step : DATA - at;
+      assert_int_equal(lsm_gzip_writer_write(g, data + at, piece, &err), LSM_OK);
+      at += piece;
+      step *= 3;
+    }
+    assert_int_equal(lsm_gzip_writer_finish(&g, head1, &err), LSM_OK);
+    assert_null(g);
+    size_t gz_len = 0, len = 0;
+    uint8_t *gz = read_bytes(path, &gz_len);
+    assert_memory_equal(gz, "\x1f\x8b\x08", 3);
+    assert_memory_equal(gz + LSM_GZIP_HEAD_OFFSET, head1, HEAD);
+    uint8_t *plain = gunzip_bytes(gz, gz_len, &len);
+    if (!plain) fail_msg("zlib cannot inflate the file written at level %d", level);
+    assert_int_equal(len, HEAD + DATA);
+    assert_memory_equal(plain, head1, HEAD);
+    assert_memory_equal(plain + HEAD, data, DATA);
+    assert_int_equal(le32(gz + gz_len - 4), HEAD + DATA); /* ISIZE */
+    if (level == 9) assert_true(gz_len < HEAD + DATA * 3 / 4); /* the runs compress */
+    free(gz);
+    free(plain);
+  }
+  free(data);
+
+  /* no head at all, no data: still a valid (empty) gzip file */
+  lsm_gzip_writer *g = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_gzip_writer_open(path, NULL, 0, 1, &g, &err), LSM_OK);
+  assert_int_equal(lsm_gzip_writer_finish(&g, NULL, &err), LSM_OK);
+  size_t gz_len = 0, len = 1;
+  uint8_t *gz = read_bytes(path, &gz_len);
+  uint8_t *plain = gunzip_bytes(gz, gz_len, &len);
+  assert_non_null(plain);
+  assert_int_equal(len, 0);
+  free(gz);
+  free(plain);
+
+  /* errors are values, with the file named */
+  join(path, sizeof path, f->dir, "missing/x.gz");
+  assert_int_equal(lsm_gzip_writer_open(path, head0, HEAD, 1, &g, &err), LSM_ERR_IO);
+  assert_null(g);
+  assert_msg_contains(err, "missing/x.gz");
+  assert_int_equal(lsm_gzip_writer_open(path, head0, 70000, 1, &g, &err), LSM_ERR_INTERNAL);
+  assert_int_equal(lsm_gzip_writer_open(path, head0, HEAD, 10, &g, &err), LSM_ERR_INTERNAL);
+  lsm_gzip_writer_abort(&g);
+  lsm_gzip_writer_abort(NULL);
+}
+
+/* volume.nii.gz inflates to volume.nii's bytes, header included (slice count
+ * and z step fixed at the end), for float and mask volumes. */
+static void test_nifti_gz_is_nii(void **state) {
+  tmp_fixture *f = *state;
+  for (int mask = 0; mask < 2; ++mask) {
+    lsm_volume_writer *w = NULL;
+    lsm_err err;
+    lsm_err_clear(&err);
+    enum { NX = 37, NY = 29, NZ = 11 };
+    float *phi = malloc(sizeof(float) * NX * NY);
+    assert_non_null(phi);
+    assert_int_equal(lsm_volume_writer_open(f->dir, LSM_FORMAT_NII | LSM_FORMAT_NII_GZ,
+                                            mask ? LSM_VALUES_MASK : LSM_VALUES_SDF, NX, NY, 0.5,
+                                            0.5, 7.0, 0.0, 0.0, 2.0, &w, &err),
+                     LSM_OK);
+    for (int z = 0; z < NZ; ++z) {
+      for (int k = 0; k < NX * NY; ++k) phi[k] = (float)((k % NX) - 18) * 0.3f + (float)z;
+      assert_int_equal(lsm_volume_writer_write_slice(w, phi, 2.0 + 1.5 * z, &err), LSM_OK);
+    }
+    free(phi);
+    if (lsm_volume_writer_finish(&w, 1.5, NZ, &err) != LSM_OK) fail_msg("%s", err.msg);
+    char path[256];
+    size_t nii_len = 0, gz_len = 0, len = 0;
+    join(path, sizeof path, f->dir, "volume.nii");
+    uint8_t *nii = read_bytes(path, &nii_len);
+    join(path, sizeof path, f->dir, "volume.nii.gz");
+    uint8_t *gz = read_bytes(path, &gz_len);
+    uint8_t *plain = gunzip_bytes(gz, gz_len, &len);
+    assert_non_null(plain);
+    assert_int_equal(nii_len, LSM_NIFTI_HEADER_BYTES + (size_t)NX * NY * NZ * (mask ? 1 : 4));
+    assert_int_equal(len, nii_len);
+    assert_memory_equal(plain, nii, nii_len);
+    assert_int_equal(le16s(plain + 46), NZ);
+    free(nii);
+    free(gz);
+    free(plain);
+  }
+  unsigned formats = 0;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_format_list_parse("nii.gz,nii", &formats, &err), LSM_OK);
+  assert_int_equal(formats, LSM_FORMAT_NII | LSM_FORMAT_NII_GZ);
+  assert_string_equal(lsm_format_name(LSM_FORMAT_NII_GZ), "nii.gz");
+  const char *names[8];
+  assert_int_equal(lsm_volume_file_names(LSM_FORMAT_NII_GZ, names, 8), 1);
+  assert_string_equal(names[0], "volume.nii.gz");
+  /* the 16-bit limit names the file written */
+  lsm_volume_writer *w = NULL;
+  assert_int_equal(lsm_volume_writer_open(f->dir, LSM_FORMAT_NII_GZ, LSM_VALUES_SDF,
+                                          LSM_NIFTI_DIM_MAX + 1, 1, 1, 1, 1, 0, 0, 0, &w, &err),
+                   LSM_ERR_LIMIT);
+  assert_msg_contains(err, "volume.nii.gz");
 }
 
 /* lsm_json_find_number: a member path through any valid formatting; invalid
@@ -1295,6 +1461,8 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_nrrd_errors, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_nifti_header_fields, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_nifti_limits, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_gzip_rewritable_head, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_nifti_gz_is_nii, setup_tmp, teardown_tmp),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
