@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Fill a label drawn on some slices of a NIfTI volume, and write it back in the volume's grid.
 
-  sparse_labels.py LABELS.nii[.gz] OUT.nii[.gz] [--label L] [--axis A] [--slices LIST]
+  sparse_labels.py LABELS.nii[.gz] OUT.nii[.gz] [--label L|all] [--axis A] [--slices LIST]
                    [--lsmorph PATH] [--keep DIR] [-- LSMORPH_OPTIONS...]
 
 The usual case: a structure segmented on every few CT or MRI slices (ITK-SNAP, 3D Slicer),
@@ -19,6 +19,26 @@ saved as a label volume whose other slices are empty.  This script
   4. writes OUT as a uint8 volume with the input's header and affine: L (1 with no --label)
      where the filled structure is, 0 elsewhere, for the slices from the first to the last
      picked one (slices outside that range are 0).
+
+With --label all (a multi-label atlas: several structures drawn on the same slices) every
+distinct non-zero value of the volume is a label (each must be an integer 1 .. 255, the
+uint8 output's range), and
+  1. the drawn slices are those of --slices, else every slice where any label is present
+     plus one typical step beyond each end, empty, as above; a label absent from a drawn
+     slice is known to be absent there;
+  2. each label in turn is filled by lsmorph, as above but with `--values sdf` (float32
+     signed distance in mm, negative inside), on the drawn slices from the one before its
+     first drawn slice to the one after its last (when there are such); without --slices
+     that slice is at most one typical step away (a slice there holds no label: it is taken
+     as drawn empty, as beyond the ends above), so that a label whose neighbours along the
+     axis are far away still ends within one step.  A label on one drawn slice only, with
+     no such slice on one side, is copied as drawn, with a warning;
+  3. each voxel gets the label whose signed distance is the most negative there, when it is
+     below 0 (a voxel outside a label's slice range counts as +inf for that label), else 0.
+     The labels' regions on a drawn slice are disjoint and the signed distances exact there,
+     so the drawn slices come back exactly.  Memory: the volume's labels, one float32
+     volume (the running minimum), the uint8 output and one label's result at a time.
+  With no options after "--" lsmorph runs with -q; one progress line per label on stderr.
 
 The in-plane voxel spacing must be square (lsmorph takes one pixel size); resample first
 otherwise.  Options after "--" go to lsmorph (for example `-- --method pls --threads 4`).
@@ -77,12 +97,12 @@ def parse_slices(text, count):
     return sorted(picked)
 
 
-def drawn_slices(present):
+def drawn_slices(present, what="the label is"):
     """The slices where the label is, and one typical step beyond each end, empty."""
     drawn = [k for k, p in enumerate(present) if p]
     if len(drawn) < 2:
-        fail("the label is on %d slice%s: at least two are needed"
-             % (len(drawn), "" if len(drawn) == 1 else "s"))
+        fail("%s on %d slice%s: at least two are needed"
+             % (what, len(drawn), "" if len(drawn) == 1 else "s"))
     step = int(np.median(np.diff(drawn)))
     picked = list(drawn)
     if drawn[0] - step >= 0:
@@ -90,6 +110,126 @@ def drawn_slices(present):
     if drawn[-1] + step < len(present):
         picked.append(drawn[-1] + step)
     return picked
+
+
+def save(nibabel, image, data, path):
+    """A uint8 volume with the input's header and affine."""
+    header = image.header.copy()
+    header.set_data_dtype(np.uint8)
+    header["scl_slope"], header["scl_inter"] = 1, 0
+    nibabel.save(type(image)(data, image.affine, header), path)
+
+
+def label_arg(text):
+    """--label: a label number, or 'all'."""
+    if text == "all":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("'%s' is not a label number or 'all'" % text)
+
+
+def atlas_labels(labels, name):
+    """The distinct non-zero values of the volume, each an integer 1 .. 255, as ints."""
+    values = np.unique(labels[labels != 0])
+    if values.size == 0:
+        fail("%s: no label (every voxel is 0)" % name)
+    whole = np.isfinite(values) & (values == np.round(values)) if values.dtype.kind == "f" \
+        else np.ones(values.shape, bool)
+    bad = values[~whole | (values < 1) | (values > 255)]
+    if bad.size:
+        fail("%s: --label all needs labels that are integers 1 .. 255 (the uint8 output), this "
+             "volume has %s" % (name, ", ".join("%g" % v for v in bad[:5].tolist())
+                                + (" and %d more" % (bad.size - 5) if bad.size > 5 else "")))
+    return [int(v) for v in values.tolist()]
+
+
+def read_volume(out, dtype):
+    """lsmorph's volume.raw as (slice, row, column), with volume.json's sizes."""
+    import json
+    try:
+        with open(os.path.join(out, "volume.json")) as f:
+            meta = json.load(f)
+        nx, ny, nz = meta["sizes"]
+        if meta.get("dtype", np.dtype(dtype).name) != np.dtype(dtype).name:
+            raise ValueError("%s samples, %s expected" % (meta["dtype"], np.dtype(dtype).name))
+        return np.fromfile(os.path.join(out, "volume.raw"), dtype).reshape(nz, ny, nx)
+    except (OSError, ValueError, KeyError) as e:
+        fail("%s: cannot read lsmorph's volume.raw / volume.json (are --format or --values among "
+             "the options after \"--\"?): %s" % (out, e))
+
+
+def fill_all(args, extra, labels, stack, sx, sz, work):
+    """--label all: (picked slices, uint8 stack (slice, i, j)), one lsmorph run per label."""
+    values = atlas_labels(labels, args.labels)
+    present = stack.reshape(stack.shape[0], -1).any(axis=1)
+    picked = parse_slices(args.slices, len(present)) if args.slices \
+        else drawn_slices(present, "the labels are")
+    if len(picked) < 2:
+        fail("--slices names %d slice: at least two are needed" % len(picked), 2)
+    # found drawn slices: a label's range reaches at most one typical step beyond its ends,
+    # as with one label (a slice there holds no label, so it is as empty as the union's ends)
+    step = None if args.slices else int(np.median(np.diff([k for k, p in enumerate(present) if p])))
+    # on_drawn[n]: the labels present on drawn slice picked[n]
+    on_drawn = [set(np.unique(stack[k]).tolist()) - {0} for k in picked]
+    best = np.zeros(stack.shape, np.float32)  # running minimum signed distance, 0 = none below 0
+    result = np.zeros(stack.shape, np.uint8)
+    copies = []
+    for count, value in enumerate(values, 1):
+        where = [n for n in range(len(picked)) if value in on_drawn[n]]
+        if not where:
+            print("sparse_labels.py: warning: label %d (%d of %d) is on none of the drawn slices; "
+                  "left out" % (value, count, len(values)), file=sys.stderr)
+            continue
+        first, last = picked[where[0]], picked[where[-1]]
+        before = picked[where[0] - 1] if where[0] > 0 else None
+        after = picked[where[-1] + 1] if where[-1] + 1 < len(picked) else None
+        if step is not None and first - step >= 0 and (before is None or first - step > before):
+            before = first - step
+        if step is not None and last + step < len(present) and (after is None or last + step < after):
+            after = last + step
+        if len(where) == 1 and (before is None or after is None):
+            print("sparse_labels.py: warning: label %d (%d of %d) is on one drawn slice only, %d, with "
+                  "no drawn slice %s it: copied as drawn, not filled"
+                  % (value, count, len(values), first, "before" if before is None else "after"),
+                  file=sys.stderr)
+            copies.append((value, first))
+            continue
+        run = ([before] if before is not None else []) + picked[where[0]:where[-1] + 1] \
+            + ([after] if after is not None else [])
+        print("sparse_labels.py: label %d (%d of %d): slices %d .. %d"
+              % (value, count, len(values), run[0], run[-1]), file=sys.stderr)
+        sys.stderr.flush()
+        base = os.path.join(work, "label-%03d" % value)
+        src, out = os.path.join(base, "slices"), os.path.join(base, "out")
+        shutil.rmtree(src, ignore_errors=True)  # no slices left from an earlier --keep run
+        os.makedirs(src)
+        for n, k in enumerate(run):
+            write_png(os.path.join(src, "%05d.png" % n), (stack[k] == value).T)
+        with open(os.path.join(base, "heights.txt"), "w") as f:
+            f.write("".join("%.17g\n" % (k * sz) for k in run))
+        cmd = [args.lsmorph, "reconstruct", src, "-o", out, "--heights", os.path.join(base, "heights.txt"),
+               "--pixel-size", repr(sx), "--dz", repr(sz), "--values", "sdf", "--format", "raw",
+               "--no-preview", "--no-slices"] + (extra or ["-q"])
+        done = subprocess.run(cmd)
+        if done.returncode != 0:
+            fail("lsmorph failed on label %d (exit %d): %s" % (value, done.returncode, " ".join(cmd)))
+        sdf = read_volume(out, "<f4")
+        if sdf.shape[0] != run[-1] - run[0] + 1:
+            fail("lsmorph wrote %d slices for label %d, expected %d (slices %d .. %d)"
+                 % (sdf.shape[0], value, run[-1] - run[0] + 1, run[0], run[-1]))
+        sdf = sdf.transpose(0, 2, 1)
+        part = best[run[0]:run[-1] + 1]
+        lower = sdf < part
+        part[lower] = sdf[lower]
+        result[run[0]:run[-1] + 1][lower] = value
+        del sdf, lower
+        if not args.keep:
+            shutil.rmtree(base, ignore_errors=True)
+    for value, k in copies:
+        result[k][stack[k] == value] = value
+    return values, picked, result
 
 
 def main():
@@ -102,7 +242,8 @@ def main():
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("labels")
     ap.add_argument("out")
-    ap.add_argument("--label", type=int, default=None, help="the label to fill (default: any non-zero)")
+    ap.add_argument("--label", type=label_arg, default=None,
+                    help="the label to fill (default: any non-zero), or 'all': each label in turn")
     ap.add_argument("--axis", type=int, choices=(0, 1, 2), default=None,
                     help="slice axis (default: the one with the largest voxel spacing)")
     ap.add_argument("--slices", default=None, help="the drawn slices, e.g. 10:60:5,63 (b included)")
@@ -112,7 +253,7 @@ def main():
     args = ap.parse_args(argv)
 
     value = args.label if args.label is not None else 1
-    if not 0 < value < 256:
+    if value != "all" and not 0 < value < 256:
         fail("--label %d does not fit the uint8 output (1 .. 255)" % value, 2)
     try:
         import nibabel
@@ -134,6 +275,19 @@ def main():
     if abs(sx - sy) > 1e-6 * max(sx, sy):
         fail("%s: in-plane spacing %g x %g is not square; resample the volume first"
              % (args.labels, sx, sy))
+    if value == "all":
+        work = args.keep or tempfile.mkdtemp(prefix="sparse-labels-")
+        try:
+            stack = np.moveaxis(labels, axis, 0)  # (slice, i, j): slice k is stack[k]
+            values, picked, result = fill_all(args, extra, labels, stack, sx, sz, work)
+            save(nibabel, image, np.moveaxis(result, 0, axis), args.out)
+        finally:
+            if not args.keep:
+                shutil.rmtree(work, ignore_errors=True)
+        print("sparse_labels.py: %d label%s on %d drawn slices (%d .. %d along axis %d) filled into %s"
+              % (len(values), "" if len(values) == 1 else "s", len(picked), picked[0], picked[-1],
+                 axis, args.out))
+        return
     inside = labels == args.label if args.label is not None else labels != 0
     stack = np.moveaxis(inside, axis, 0)  # (slice, i, j): slice k is stack[k]
     present = stack.reshape(stack.shape[0], -1).any(axis=1)
@@ -157,19 +311,14 @@ def main():
         run = subprocess.run(cmd)
         if run.returncode != 0:
             fail("lsmorph failed (exit %d): %s" % (run.returncode, " ".join(cmd)))
-        import json
-        meta = json.load(open(os.path.join(out, "volume.json")))
-        nx, ny, nz = meta["sizes"]
-        filled = np.fromfile(os.path.join(out, "volume.raw"), np.uint8).reshape(nz, ny, nx)
+        filled = read_volume(out, np.uint8)
+        nz = filled.shape[0]
         if nz != picked[-1] - picked[0] + 1:
             fail("lsmorph wrote %d slices, expected %d (slices %d .. %d)"
                  % (nz, picked[-1] - picked[0] + 1, picked[0], picked[-1]))
         result = np.zeros(stack.shape, np.uint8)
         result[picked[0]:picked[-1] + 1] = np.where(filled.transpose(0, 2, 1) == 255, value, 0)
-        header = image.header.copy()
-        header.set_data_dtype(np.uint8)
-        header["scl_slope"], header["scl_inter"] = 1, 0
-        nibabel.save(type(image)(np.moveaxis(result, 0, axis), image.affine, header), args.out)
+        save(nibabel, image, np.moveaxis(result, 0, axis), args.out)
     finally:
         if not args.keep:
             shutil.rmtree(work, ignore_errors=True)

@@ -2,7 +2,10 @@
 # examples/sparse_labels.py end to end: an ellipsoid labelled on every 4th slice
 # of a NIfTI volume (0.8 x 0.8 x 2.5 mm, an oblique affine, a second label on
 # every slice) is filled back into the volume's grid; then the same across
-# axis 0 with --slices; then the refusals.  Needs nibabel (python3-nibabel).
+# axis 0 with --slices; then --label all on a multi-label atlas (touching,
+# nested, one-slice and edge labels; labels far apart along the axis; one
+# label alone against --label L); then the refusals.  Needs nibabel
+# (python3-nibabel).
 #   sh tests/test_sparse_labels.sh BUILD_DIR
 # Prints "sparse-labels: N passed, N failed".
 set -u
@@ -87,6 +90,135 @@ check "axis 0, --slices: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 
 check "axis 0 chosen by the spacing" grep -q "along axis 0" "$TMP/o"
 [ $rc -eq 0 ] && run_checks "$TMP/log" verify "$TMP/x.nii" "$TMP/x-out.nii" 0 5 0.99
 
+# make_atlas DIR: label volumes drawn on every 4th slice across axis 2 (0.8 x 0.8 x 2.5 mm,
+# an oblique affine), each with NAME.truth.npy holding the whole labels.  atlas.nii.gz: 1 a
+# large ellipsoid (slices 13 .. 50), 2 touching it (3 .. 30), 3 nested inside 1, 4 on drawn
+# slice 40 only (39 .. 41), 5 on the first drawn slice only (0 .. 1); apart.nii: 1 on slices
+# 19 .. 50 and 2 on 1 .. 10, no label on the drawn slices 12 and 16 between them; one.nii:
+# label 1 of the atlas alone; big.nii: the atlas with label 300 (int16); half.nii: the atlas
+# with label 2.5 (float32)
+make_atlas() {
+  "$PY" - "$1" <<'PYEOF'
+import os, sys, numpy as np, nibabel as nib
+shape, sp = (100, 90, 60), (0.8, 0.8, 2.5)
+g = np.mgrid[0:shape[0], 0:shape[1], 0:shape[2]].astype(float)
+def ell(c, r):
+    return sum(((g[a] - c[a]) * sp[a] / r[a]) ** 2 for a in (0, 1, 2)) < 1
+c, s = np.cos(0.5), np.sin(0.5)
+aff = np.array([[0.8, -0.6, 0, 0], [0.6 * c, 0.8 * c, -s, 0], [0.6 * s, 0.8 * s, c, 0],
+                [0, 0, 0, 1.0]]) @ np.diag(sp + (1.0,))
+aff[:3, 3] = (40, 30, -70)
+def save(name, truth, dtype=np.int16, swap=None):
+    lab = np.zeros(shape, dtype)
+    lab[:, :, ::4] = truth[:, :, ::4]
+    if swap:
+        lab[lab == swap[0]] = swap[1]
+    out = os.path.join(sys.argv[1], name)
+    nib.save(nib.Nifti1Image(lab, aff), out)
+    np.save(out + ".truth.npy", truth)
+atlas = np.zeros(shape, np.uint8)
+atlas[ell((40.3, 45.2, 31.4), (22.0, 20.0, 48.0))] = 1
+atlas[ell((74.6, 40.1, 16.7), (12.0, 14.0, 35.0))] = 2  # painted over 1: they touch
+atlas[ell((38.2, 47.7, 30.3), (6.0, 7.0, 16.0))] = 3    # a hole in 1
+atlas[ell((72.4, 74.5, 40.0), (8.0, 6.0, 3.0))] = 4
+atlas[ell((12.5, 14.5, 0.0), (5.0, 6.0, 3.5))] = 5
+save("atlas.nii.gz", atlas)
+save("one.nii", np.where(atlas == 1, 1, 0).astype(np.uint8))
+save("big.nii", atlas, swap=(2, 300))
+save("half.nii", atlas, np.float32, swap=(2, 2.5))
+apart = np.zeros(shape, np.uint8)
+apart[ell((40.3, 45.2, 34.4), (22.0, 20.0, 40.0))] = 1
+apart[ell((70.6, 40.1, 6.0), (12.0, 14.0, 12.0))] = 2
+save("apart.nii", apart)
+PYEOF
+}
+
+# verify_all IN OUT L:MIN_DICE,... KEEP|- [IN OUT ...]: --label all's outputs against the
+# truth, every 4th slice across axis 2 drawn; with KEEP (its --keep folder) also the combine
+# rule against the kept signed distances
+verify_all() {
+  "$PY" - "$@" <<'PYEOF'
+import json, os, sys, numpy as np, nibabel as nib
+def rep(good, what): print(("ok - " if good else "FAIL - ") + what)
+def combine(keep, shape, dz):
+    """The label of the most negative kept signed distance (+inf outside a run), 0 where none
+    is negative, and the count of voxels inside two labels' fills or more."""
+    best, label, count = np.zeros(shape, np.float32), np.zeros(shape, np.uint8), np.zeros(shape, int)
+    for d in sorted(os.listdir(keep)):
+        out = os.path.join(keep, d, "out")
+        meta = json.load(open(os.path.join(out, "volume.json")))
+        nx, ny, nz = meta["sizes"]
+        sdf = np.fromfile(os.path.join(out, "volume.raw"), "<f4").reshape(nz, ny, nx).transpose(2, 1, 0)
+        z0 = int(round(meta["origin"][2] / dz))
+        run = (slice(None), slice(None), slice(z0, z0 + nz))
+        lower = sdf < best[run]
+        best[run][lower] = sdf[lower]
+        label[run][lower] = int(d.split("-")[1])
+        count[run] += sdf < 0
+    return label, int((count >= 2).sum())
+for n in range(1, len(sys.argv), 4):
+    src, out, keep = sys.argv[n], sys.argv[n + 1], sys.argv[n + 3]
+    min_dice = dict((int(l), float(d)) for l, d in (p.split(":") for p in sys.argv[n + 2].split(",")))
+    name = os.path.basename(src).split(".")[0]
+    a, b = nib.load(src), nib.load(out)
+    truth = np.load(src + ".truth.npy")
+    got = np.asarray(b.dataobj)
+    rep(got.shape == truth.shape and got.dtype == np.uint8, "%s: shape %s, %s" % (name, got.shape, got.dtype))
+    rep(np.allclose(a.affine, b.affine), "%s: the input's affine kept" % name)
+    values = np.unique(got).tolist()
+    rep(set(values) <= set(np.unique(truth).tolist()), "%s: values %s among the labels" % (name, values))
+    drawn_bad = [k for k in range(0, truth.shape[2], 4) if not np.array_equal(got[:, :, k], truth[:, :, k])]
+    rep(not drawn_bad, "%s: every drawn slice back exactly, all labels%s"
+        % (name, ": not %s" % drawn_bad if drawn_bad else ""))
+    for label, least in sorted(min_dice.items()):
+        f, t = got == label, truth == label
+        dice = 2 * (f & t).sum() / (f.sum() + t.sum())
+        rep(dice >= least, "%s: label %d Dice %.4f >= %g" % (name, label, dice, least))
+    if keep != "-":
+        want, both = combine(keep, got.shape, a.header.get_zooms()[2])
+        filled = np.isin(got, [int(d.split("-")[1]) for d in os.listdir(keep)]) | (got == 0)
+        rep(both > 0 and np.array_equal(got[filled], want[filled]) and not want[~filled].any(),
+            "%s: each voxel the label of the most negative distance (%d voxels inside two fills)"
+            % (name, both))
+PYEOF
+}
+
+# ---- --label all: a multi-label atlas ----------------------------------------------------------
+make_atlas "$TMP"
+"$PY" "$SCRIPT" "$TMP/atlas.nii.gz" "$TMP/atlas-out.nii.gz" --label all --keep "$TMP/keep" --lsmorph "$LSM" \
+  >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "all: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+check "all: says what it filled" grep -q "5 labels on 14 drawn slices (0 .. 52 along axis 2)" "$TMP/o"
+check "all: a line per label" grep -q "label 3 (3 of 5): slices 20 .. 40" "$TMP/e"
+check "all: a one-slice label within the drawn slices is filled" grep -q "label 4 (4 of 5): slices 36 .. 44" "$TMP/e"
+check "all: a one-slice label at the edge is copied, with a warning" \
+  grep -q "warning: label 5 (5 of 5) is on one drawn slice only, 0, with no drawn slice before it" "$TMP/e"
+check "all: lsmorph quiet without options" [ "$(grep -c -v '^sparse_labels.py: ' "$TMP/e")" -eq 0 ]
+rc_atlas=$rc
+
+# labels far apart along the axis: each ends within one step of its last drawn slice, not at
+# the other label's first one (slices 12 and 16 hold no label and come back empty)
+"$PY" "$SCRIPT" "$TMP/apart.nii" "$TMP/apart-out.nii" --label all --lsmorph "$LSM" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "apart: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+check "apart: label 2 on slices 0 .. 12" grep -q "label 2 (2 of 2): slices 0 .. 12" "$TMP/e"
+# measured Dice: atlas 0.9925 0.9897 0.9600 0.4257 (4 spans 3 slices, filled over 7; 5 is
+# copied); apart 0.9937 0.8857 (0.6782 when label 2 reached slice 20, halfway to label 1)
+[ $rc_atlas -eq 0 ] && [ $rc -eq 0 ] && run_checks "$TMP/log" verify_all \
+  "$TMP/atlas.nii.gz" "$TMP/atlas-out.nii.gz" 1:0.99,2:0.985,3:0.95,4:0.4 "$TMP/keep" \
+  "$TMP/apart.nii" "$TMP/apart-out.nii" 1:0.99,2:0.88 -
+
+# one label alone: --label all fills the same voxels as --label 1
+"$PY" "$SCRIPT" "$TMP/one.nii" "$TMP/one-all.nii" --label all --lsmorph "$LSM" -- -q >"$TMP/o" 2>"$TMP/e" &&
+  "$PY" "$SCRIPT" "$TMP/one.nii" "$TMP/one-1.nii" --label 1 --lsmorph "$LSM" -- -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "one label: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+check "one label: --label all fills what --label 1 fills" "$PY" -c '
+import sys, numpy as np, nibabel as nib
+a, b = (np.asarray(nib.load(f).dataobj) for f in sys.argv[1:])
+sys.exit(not (np.array_equal(a, b) and (a == 1).sum() > 50000))' "$TMP/one-all.nii" "$TMP/one-1.nii"
+
 # ---- refusals -------------------------------------------------------------------------------------
 expect_fail() { # DESC RC PHRASE ARGS...
   desc=$1 want=$2 phrase=$3
@@ -101,5 +233,10 @@ expect_fail "a label on no slice" 1 "the label is on 0 slices" "$TMP/z.nii.gz" "
 expect_fail "bad --slices" 2 "--slices: 'x' is not a slice number" "$TMP/z.nii.gz" "$TMP/no.nii" --slices 4,x
 expect_fail "--slices out of range" 2 "--slices: 60 is outside 0 .. 59" "$TMP/z.nii.gz" "$TMP/no.nii" --slices 4,60
 expect_fail "missing file" 1 "cannot read" "$TMP/none.nii" "$TMP/no.nii"
+expect_fail "all: a label above 255" 1 "integers 1 .. 255 (the uint8 output), this volume has 300" \
+  "$TMP/big.nii" "$TMP/no.nii" --label all
+check "all: a label above 255: one error line" [ "$(wc -l <"$TMP/e")" -eq 1 ]
+expect_fail "all: a label 2.5" 1 "this volume has 2.5" "$TMP/half.nii" "$TMP/no.nii" --label all
+expect_fail "bad --label" 2 "--label: 'x' is not a label number or 'all'" "$TMP/z.nii.gz" "$TMP/no.nii" --label x
 check "no output after a refusal" [ ! -e "$TMP/no.nii" ]
 finish
