@@ -245,6 +245,18 @@ lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t
   return LSM_OK;
 }
 
+lsm_status lsm_close_written(FILE **fp, const char *path, lsm_status st, lsm_err *err) {
+  if (!fp || !*fp) return st;
+  if (st == LSM_OK && (fflush(*fp) != 0 || ferror(*fp)))
+    st = lsm_fail(err, LSM_ERR_IO, path, "write failed: %s", strerror(errno));
+  const int closed = fclose(*fp);
+  const int close_errno = errno;
+  *fp = NULL;
+  if (closed != 0 && st == LSM_OK)
+    st = lsm_fail(err, LSM_ERR_IO, path, "write failed on close: %s", strerror(close_errno));
+  return st;
+}
+
 int lsm_rename_exchange(const char *a, const char *b) {
 #if defined(__linux__) && defined(RENAME_EXCHANGE)
   return renameat2(AT_FDCWD, a, AT_FDCWD, b, RENAME_EXCHANGE);

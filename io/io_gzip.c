@@ -146,12 +146,7 @@ lsm_status lsm_gzip_writer_finish(lsm_gzip_writer **gp, const unsigned char *hea
       (fseek(g->fp, LSM_GZIP_HEAD_OFFSET, SEEK_SET) != 0 ||
        fwrite(head, 1, g->head_bytes, g->fp) != g->head_bytes))
     st = write_fail(g, err);
-  if (st == LSM_OK && (fflush(g->fp) != 0 || ferror(g->fp))) st = write_fail(g, err);
-  int closed = fclose(g->fp);
-  int e = errno;
-  g->fp = NULL;
-  if (closed != 0 && st == LSM_OK)
-    st = lsm_fail(err, LSM_ERR_IO, g->path, "write failed on close: %s", strerror(e));
+  st = lsm_close_written(&g->fp, g->path, st, err);
   lsm_gzip_writer_abort(gp);
   return st;
 }

@@ -175,17 +175,10 @@ lsm_status lsm_nrrd_finish(lsm_nrrd_writer **wp, double sz, lsm_err *err) {
                   NRRD_HEADER_BYTES);
   } else if (fseek(w->fp, 0, SEEK_SET) != 0) {
     st = lsm_fail(err, LSM_ERR_IO, w->path, "write failed: %s", strerror(errno));
-  } else if (fwrite(header, 1, NRRD_HEADER_BYTES, w->fp) != NRRD_HEADER_BYTES ||
-             fflush(w->fp) != 0 || ferror(w->fp)) {
+  } else if (fwrite(header, 1, NRRD_HEADER_BYTES, w->fp) != NRRD_HEADER_BYTES) {
     st = lsm_fail(err, LSM_ERR_IO, w->path, "write failed: %s", strerror(errno));
-  } else {
-    w->sz = sz;
   }
-  int closed = fclose(w->fp);
-  int close_errno = errno;
-  w->fp = NULL;
-  if (closed != 0 && st == LSM_OK)
-    st = lsm_fail(err, LSM_ERR_IO, w->path, "write failed on close: %s", strerror(close_errno));
+  st = lsm_close_written(&w->fp, w->path, st, err);
   lsm_nrrd_abort(wp);
   return st;
 }

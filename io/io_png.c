@@ -514,10 +514,7 @@ static lsm_status png_write_common(const char *path, const uint8_t *pixels, int 
   if (w.png) png_destroy_write_struct(&w.png, w.info ? &w.info : NULL);
   free(w.row);
 
-  if (st == LSM_OK && (fflush(fp) != 0 || ferror(fp)))
-    st = lsm_fail(err, LSM_ERR_IO, path, "write failed: %s", strerror(errno));
-  if (fclose(fp) != 0 && st == LSM_OK)
-    st = lsm_fail(err, LSM_ERR_IO, path, "write failed on close: %s", strerror(errno));
+  st = lsm_close_written(&fp, path, st, err);
   if (st != LSM_OK && regular) remove(path); /* never unlink a device or FIFO */
   return st;
 }

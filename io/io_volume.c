@@ -361,15 +361,7 @@ static lsm_status stream_finish(vol_stream *s, const lsm_volume_info *info, lsm_
     else if (fseek(s->fp, 0, SEEK_SET) != 0 || fwrite(header, 1, len, s->fp) != len)
       st = lsm_fail(err, LSM_ERR_IO, s->path, "write failed: %s", strerror(errno));
   }
-  if (s->gz || !s->fp) return st; /* gzip: finished (or left for abort) above */
-  if (st == LSM_OK && (fflush(s->fp) != 0 || ferror(s->fp)))
-    st = lsm_fail(err, LSM_ERR_IO, s->path, "write failed: %s", strerror(errno));
-  int closed = fclose(s->fp);
-  int e = errno;
-  s->fp = NULL;
-  if (closed != 0 && st == LSM_OK)
-    st = lsm_fail(err, LSM_ERR_IO, s->path, "write failed on close: %s", strerror(e));
-  return st;
+  return lsm_close_written(&s->fp, s->path, st, err); /* gzip: closed above, fp NULL */
 }
 
 lsm_status lsm_volume_writer_finish(lsm_volume_writer **wp, double sz, size_t count,

@@ -145,6 +145,11 @@ void lsm_nrrd_abort(lsm_nrrd_writer **w);
 int lsm_rename_exchange(const char *a, const char *b);
 /* mkdir -p for one level; ok if it already exists as a folder. */
 lsm_status lsm_make_dir(const char *path, lsm_err *err);
+/* Ends a file that was written: flushes it, checks its error flag, closes it
+ * and sets *fp to NULL.  Returns st when st already is an error (the file is
+ * still closed), else the first failure as "<path>: write failed: ...", else
+ * LSM_OK.  Harmless when *fp is NULL (returns st). */
+lsm_status lsm_close_written(FILE **fp, const char *path, lsm_status st, lsm_err *err);
 /* Reads a whole file into a malloc'd buffer (NUL-terminated); refuses files
  * larger than max_bytes. */
 lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t *length,
