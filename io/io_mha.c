@@ -15,6 +15,12 @@
 size_t lsm_mha_header(char *out, size_t cap, const lsm_volume_info *info) {
   if (!out || !info || cap == 0) return 0;
   const char *type = info->values == LSM_VALUES_MASK ? "MET_UCHAR" : "MET_FLOAT";
+  char o[3][32], sp[3][32]; /* shortest round-trip forms: 0.8, not 0.80000000000000004 */
+  const double ov[3] = {info->ox, info->oy, info->oz}, sv[3] = {info->sx, info->sy, info->sz};
+  for (int k = 0; k < 3; ++k) {
+    lsm_shortest_number(o[k], sizeof o[k], ov[k]);
+    lsm_shortest_number(sp[k], sizeof sp[k], sv[k]);
+  }
   int len = snprintf(out, cap,
                      "ObjectType = Image\n"
                      "NDims = 3\n"
@@ -22,15 +28,14 @@ size_t lsm_mha_header(char *out, size_t cap, const lsm_volume_info *info) {
                      "BinaryDataByteOrderMSB = False\n"
                      "CompressedData = False\n"
                      "TransformMatrix = 1 0 0 0 1 0 0 0 1\n"
-                     "Offset = %.17g %.17g %.17g\n"
+                     "Offset = %s %s %s\n"
                      "CenterOfRotation = 0 0 0\n"
-                     "ElementSpacing = %.17g %.17g %24.17g\n"
+                     "ElementSpacing = %s %s %24s\n"
                      "DimSize = %d %d %20zu\n"
                      "ElementNumberOfChannels = 1\n"
                      "ElementType = %s\n"
                      "ElementDataFile = LOCAL\n",
-                     info->ox, info->oy, info->oz, info->sx, info->sy, info->sz, info->nx,
-                     info->ny, info->nz, type);
+                     o[0], o[1], o[2], sp[0], sp[1], sp[2], info->nx, info->ny, info->nz, type);
   if (len < 0 || (size_t)len >= cap) return 0;
   return (size_t)len;
 }

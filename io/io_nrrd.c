@@ -30,6 +30,9 @@ size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size
                        double sx, double sy, double sz, double ox, double oy, double oz) {
   char body[LSM_NRRD_HEADER_BYTES + 1];
   if (cap < LSM_NRRD_HEADER_BYTES + 1) return 0;
+  char t[6][32]; /* shortest round-trip forms: 0.8, not 0.80000000000000004 */
+  const double v[6] = {sx, sy, sz, ox, oy, oz};
+  for (int k = 0; k < 6; ++k) lsm_shortest_number(t[k], sizeof t[k], v[k]);
   int len = snprintf(body, sizeof body,
                      "NRRD0004\n"
                      "# Complete NRRD file format specification at:\n"
@@ -39,13 +42,13 @@ size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size
                      "dimension: 3\n"
                      "space dimension: 3\n"
                      "sizes: %d %d %zu\n"
-                     "space directions: (%.17g,0,0) (0,%.17g,0) (0,0,%.17g)\n"
-                     "space origin: (%.17g,%.17g,%.17g)\n"
+                     "space directions: (%s,0,0) (0,%s,0) (0,0,%s)\n"
+                     "space origin: (%s,%s,%s)\n"
                      "kinds: domain domain domain\n"
                      "%s"
                      "encoding: raw\n",
                      is_float ? "" : ": mask, 255 inside, 0 outside", is_float ? "float" : "uchar",
-                     nx, ny, nz, sx, sy, sz, ox, oy, oz, is_float ? "endian: little\n" : "");
+                     nx, ny, nz, t[0], t[1], t[2], t[3], t[4], t[5], is_float ? "endian: little\n" : "");
   /* then "# " + dots + "\n" + "\n" (the blank line that ends the header) */
   if (len < 0 || (size_t)len + 4 > LSM_NRRD_HEADER_BYTES) return 0;
   size_t pad = LSM_NRRD_HEADER_BYTES - (size_t)len - 4;

@@ -15,20 +15,26 @@ size_t lsm_vtk_header(char *out, size_t cap, const lsm_volume_info *info) {
   if (!out || !info || cap == 0) return 0;
   const int mask = info->values == LSM_VALUES_MASK;
   size_t points = (size_t)info->nx * (size_t)info->ny * info->nz;
+  char o[3][32], sp[3][32]; /* shortest round-trip forms: 0.8, not 0.80000000000000004 */
+  const double ov[3] = {info->ox, info->oy, info->oz}, sv[3] = {info->sx, info->sy, info->sz};
+  for (int k = 0; k < 3; ++k) {
+    lsm_shortest_number(o[k], sizeof o[k], ov[k]);
+    lsm_shortest_number(sp[k], sizeof sp[k], sv[k]);
+  }
   int len = snprintf(out, cap,
                      "# vtk DataFile Version 3.0\n"
                      "lsmorph %s (%s), physical units\n"
                      "BINARY\n"
                      "DATASET STRUCTURED_POINTS\n"
                      "DIMENSIONS %d %d %20zu\n"
-                     "SPACING %.17g %.17g %24.17g\n"
-                     "ORIGIN %.17g %.17g %.17g\n"
+                     "SPACING %s %s %24s\n"
+                     "ORIGIN %s %s %s\n"
                      "POINT_DATA %20zu\n"
                      "SCALARS %s %s 1\n"
                      "LOOKUP_TABLE default\n",
                      mask ? "mask" : "signed distance",
                      mask ? "255 inside, 0 outside" : "negative inside", info->nx, info->ny,
-                     info->nz, info->sx, info->sy, info->sz, info->ox, info->oy, info->oz,
+                     info->nz, sp[0], sp[1], sp[2], o[0], o[1], o[2],
                      points, mask ? "mask" : "sdf", mask ? "unsigned_char" : "float");
   if (len < 0 || (size_t)len >= cap) return 0;
   return (size_t)len;

@@ -311,7 +311,9 @@ static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, 
   LSM_TRY(lsm_volume_writer_write_slice(s->volume, phi, z, err));
   if (s->mesh && higher) LSM_TRY(lsm_mesh_add_slice(s->mesh, phi, z, err));
   if (s->preview && higher) LSM_TRY(lsm_preview_add_slice(s->preview, phi, z, input_index, err));
-  if (fprintf(s->heights, "%.17g\n", z) < 0)
+  char z_text[40]; /* the shortest form that reads back as z: 0.8, not 0.80000000000000004 */
+  lsm_shortest_number(z_text, sizeof z_text, z);
+  if (fprintf(s->heights, "%s\n", z_text) < 0)
     return lsm_fail(err, LSM_ERR_IO, NULL, "%s/heights.txt: write failed: %s", s->dir,
                     strerror(errno));
   if (s->count == 0) {
@@ -938,6 +940,10 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
                       "each pair of that mode)\n");
     if (cli->backend == LSM_BACKEND_C && cli->device_given)
       fprintf(stderr, "lsmorph: note: --device has no effect with --backend c\n");
+    if (cli->stack.method != LSM_METHOD_BLEND && cli->stack.morph.cfl > 1.0)
+      fprintf(stderr, "lsmorph: note: --cfl %g is above 1, where the schemes are no longer "
+                      "monotone: thin parts may oscillate or blow up (a blow-up stops the run "
+                      "with an error)\n", cli->stack.morph.cfl);
   }
   lsm_stack_opts_resolve(&cli->stack); /* run.json records what the run uses */
   const int threads = setup_run(cli);
@@ -1053,11 +1059,18 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
         const double top = z[src.count - 1], range = top - z[0], short_by = top - sink.z_last;
         if (short_by > 1e-6 * dz) {
           const double steps = ceil(range / dz);
+          char last[40], top_text[40], dz_text[40], range_text[40], fit[40];
+          lsm_shortest_number(last, sizeof last, sink.z_last); /* 1e6 - 4e-6 stays apart */
+          lsm_shortest_number(top_text, sizeof top_text, top);
+          lsm_shortest_number(dz_text, sizeof dz_text, dz);
+          lsm_shortest_number(range_text, sizeof range_text, range);
+          lsm_shortest_number(fit, sizeof fit, range / steps);
           fprintf(stderr,
-                  "lsmorph: note: the output slices stop at height %.9g, %.4g below the last "
-                  "input slice (%.9g), which is not in the volume: the step %.9g does not divide "
-                  "the heights' range %.9g; --dz %.15g (%.0f steps) ends on it\n",
-                  sink.z_last, short_by, top, dz, range, range / steps, steps);
+                  "lsmorph: note: the output slices stop at height %s, %.4g below the last "
+                  "input slice (%s), which is not in the volume: the step %s does not divide "
+                  "the heights' range %s; --dz %s (%.0f step%s) ends on it\n",
+                  last, short_by, top_text, dz_text, range_text, fit, steps,
+                  steps == 1.0 ? "" : "s");
         }
       }
       const char *files[16];

@@ -175,7 +175,7 @@ check "--dz 7 exits 0 (got $rc)" [ $rc -eq 0 ]
 check "--dz 7: a note says the slices stop at 238, 2 below the last input slice" \
   grep -q "note: the output slices stop at height 238, 2 below the last input slice (240)" "$TMP/e"
 check "--dz 7: the note names a --dz that ends on it (35 steps)" \
-  grep -q -e "--dz 6.85714285714286 (35 steps) ends on it" "$TMP/e"
+  grep -q -e "--dz 6.857142857142857 (35 steps) ends on it" "$TMP/e"
 check "--dz 7: heights.txt ends at 238" [ "$(tail -n 1 "$TMP/out-dz7/heights.txt")" = "238" ]
 "$LSM" reconstruct "$SET" -o "$TMP/out-dz" --input outline --heights "$SET/heights.txt" \
   --dz 6.85714285714286 --no-preview --no-slices >"$TMP/o" 2>"$TMP/e"
@@ -351,6 +351,13 @@ check "--interp linear: --ends tip gives the same volume as halfway" cmp -s "$TM
 check "--tol without --per-iteration: a note" grep -q "note: --tol has no effect without --per-iteration" "$TMP/e"
 check "--seed with ls: a note" grep -q "note: --seed has no effect without --method pls" "$TMP/e"
 check "--device with the C backend: a note" grep -q "note: --device has no effect with --backend c" "$TMP/e"
+check "--cfl at its default: no note about monotonicity" sh -c "! grep -q 'is above 1' '$TMP/e'"
+"$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-cfl" --spacing 8 --cfl 1.2 --format raw \
+  --no-preview >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--cfl 1.2 exits 0 (got $rc)" [ $rc -eq 0 ]
+check "--cfl 1.2: a note says the schemes are monotone only up to 1" \
+  grep -q "note: --cfl 1.2 is above 1, where the schemes are no longer monotone" "$TMP/e"
 "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-blend" --spacing 8 --method blend --format raw \
   --no-preview >"$TMP/o" 2>"$TMP/e"
 "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-blend-cfl" --spacing 8 --method blend --format raw \
