@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""Fill a label drawn on some slices of a NIfTI volume, and write it back in the volume's grid.
+"""Fill a label drawn on some slices of a NIfTI or NRRD volume, and write it back in its grid.
 
   sparse_labels.py LABELS.nii[.gz] OUT.nii[.gz] [--label L|all] [--axis A] [--slices LIST]
                    [--lsmorph PATH] [--keep DIR] [-- LSMORPH_OPTIONS...]
+  sparse_labels.py LABELS.nrrd|LABELS.seg.nrrd OUT.nrrd|OUT.seg.nrrd [same options]
 
 The usual case: a structure segmented on every few CT or MRI slices (ITK-SNAP, 3D Slicer),
 saved as a label volume whose other slices are empty.  This script
@@ -16,7 +17,7 @@ saved as a label volume whose other slices are empty.  This script
   3. writes them as PNG masks with their heights in the volume's units (mm) and runs
      `lsmorph reconstruct --pixel-size SX --dz SZ --values mask`, so every output slice lies
      on a slice of the volume and the drawn slices come back exactly;
-  4. writes OUT as a uint8 volume with the input's header and affine: L (1 with no --label)
+  4. writes OUT as a uint8 volume with the input's header and affine (or NRRD geometry): L (1 with no --label)
      where the filled structure is, 0 elsewhere, for the slices from the first to the last
      picked one (slices outside that range are 0).
 
@@ -40,12 +41,23 @@ uint8 output's range), and
      volume (the running minimum), the uint8 output and one label's result at a time.
   With no options after "--" lsmorph runs with -q; one progress line per label on stderr.
 
+NRRD (3D Slicer's labelmap .nrrd and segmentation .seg.nrrd, chosen by the file name): a
+3D volume of integers or floats, raw or gzip encoded, in one file (no detached .nhdr header, no
+byte or line skip); the voxel spacing of an axis is the length of its space direction (else its
+'spacings' entry, else 1).  OUT is written with the input's header lines and key/value pairs in
+order (space, space directions, space origin, Slicer's SegmentN_* keys, so a .seg.nrrd loads as
+the same segments), with type uint8, encoding gzip and endian little.  A 4D .seg.nrrd (segments
+overlapping, in layers) is refused: export a labelmap or make the segments non-overlapping.
+OUT must have the input's format (NRRD to NIfTI or back is refused: their geometry conventions
+differ, LPS and RAS).
+
 The in-plane voxel spacing must be square (lsmorph takes one pixel size); resample first
 otherwise.  Options after "--" go to lsmorph (for example `-- --method pls --threads 4`).
-Needs nibabel and numpy (Debian: python3-nibabel, python3-numpy).  Exit status 0, 1 on an
+Needs numpy, and nibabel for NIfTI (Debian: python3-numpy, python3-nibabel).  Exit status 0, 1 on an
 error ("sparse_labels.py: error: ..."), 2 on a usage error.
 """
 import argparse
+import gzip
 import os
 import shutil
 import struct
@@ -75,6 +87,179 @@ def write_png(path, mask):
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
                 + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
+
+# ---- NRRD (3D Slicer's .nrrd / .seg.nrrd): a small reader and writer ------------------------------
+NRRD_TYPES = {}
+for _dtype, _names in (("i1", "signed char, int8, int8_t"),
+                       ("u1", "uchar, unsigned char, uint8, uint8_t"),
+                       ("i2", "short, short int, signed short, signed short int, int16, int16_t"),
+                       ("u2", "ushort, unsigned short, unsigned short int, uint16, uint16_t"),
+                       ("i4", "int, signed int, int32, int32_t"),
+                       ("u4", "uint, unsigned int, uint32, uint32_t"),
+                       ("i8", "longlong, long long, long long int, signed long long, "
+                              "signed long long int, int64, int64_t"),
+                       ("u8", "ulonglong, unsigned long long, unsigned long long int, uint64, uint64_t"),
+                       ("f4", "float"), ("f8", "double")):
+    for _name in _names.split(", "):
+        NRRD_TYPES[_name] = _dtype
+
+
+def is_nrrd(path):
+    return path.lower().endswith((".nrrd", ".nhdr"))
+
+
+class Nrrd(object):
+    """A NRRD file's header: magic, lines (("field", name, value), ("kv", key, value) or
+    ("comment", text, None), in order), fields (lowercase name -> value) and spacings."""
+
+
+def read_nrrd(path):
+    """(header, labels indexed [i, j, k], the first axis the fastest in the file)."""
+    if path.lower().endswith(".nhdr"):
+        fail("%s: a detached NRRD header (.nhdr) is not supported; save the volume as a single "
+             ".nrrd or .seg.nrrd file" % path)
+    try:
+        f = open(path, "rb")
+    except OSError as e:
+        fail("%s: cannot read: %s" % (path, e.strerror))
+    with f:
+        magic = f.readline().decode("latin-1").rstrip("\r\n")
+        if not (magic.startswith("NRRD000") and magic[7:].isdigit()):
+            fail("%s: cannot read: not a NRRD file (no NRRD000N magic line)" % path)
+        hdr = Nrrd()
+        hdr.magic, hdr.lines, hdr.fields = magic, [], {}
+        while True:
+            line = f.readline()
+            if not line:
+                fail("%s: the NRRD header has no blank line, so no data follows it (a detached "
+                     "header?); save the volume as a single .nrrd or .seg.nrrd file" % path)
+            line = line.decode("latin-1").rstrip("\r\n")
+            if line == "":
+                break
+            if line.startswith("#"):
+                hdr.lines.append(("comment", line, None))
+                continue
+            kv, fd = line.find(":="), line.find(": ")
+            if kv > 0 and (fd < 0 or kv < fd):
+                hdr.lines.append(("kv", line[:kv], line[kv + 2:]))
+            elif fd > 0:
+                name, value = line[:fd], line[fd + 2:].strip()
+                hdr.lines.append(("field", name, value))
+                hdr.fields[name.lower().replace(" ", "")] = value
+            else:
+                fail("%s: cannot read NRRD header line '%s'" % (path, line))
+        fields = hdr.fields
+        for name in ("datafile", "datafiles"):
+            if name in fields:
+                fail("%s: the data is in a separate file (data file: %s), not supported; save the "
+                     "volume as a single .nrrd or .seg.nrrd file" % (path, fields[name]))
+        for name in ("type", "dimension", "sizes", "encoding"):
+            if name not in fields:
+                fail("%s: the NRRD header has no '%s' field" % (path, name))
+        try:
+            dimension = int(fields["dimension"])
+            sizes = [int(v) for v in fields["sizes"].split()]
+        except ValueError:
+            fail("%s: bad NRRD dimension or sizes: %s, %s" % (path, fields["dimension"], fields["sizes"]))
+        if dimension == 4:
+            fail("%s: a 4D NRRD (a .seg.nrrd whose segments overlap, stored as layers) is not "
+                 "supported; in 3D Slicer export the segmentation as a labelmap volume, or make "
+                 "the segments non-overlapping (one layer) and save again" % path)
+        if dimension != 3 or len(sizes) != 3:
+            fail("%s: a 3D volume is needed, this NRRD has dimension %s, sizes %s"
+                 % (path, fields["dimension"], fields["sizes"]))
+        kind = NRRD_TYPES.get(" ".join(fields["type"].split()).lower())
+        if kind is None:
+            fail("%s: NRRD type '%s' is not supported" % (path, fields["type"]))
+        encoding = fields["encoding"].lower()
+        if encoding not in ("raw", "gzip", "gz"):
+            fail("%s: NRRD encoding '%s' is not supported (raw or gzip only); save the volume "
+                 "compressed or uncompressed from 3D Slicer" % (path, fields["encoding"]))
+        for name in ("byteskip", "lineskip"):
+            if fields.get(name, "0").strip() != "0":
+                fail("%s: NRRD %s skip %s is not supported (0 only)"
+                     % (path, name[:-4], fields[name]))
+        endian = fields.get("endian", "little").lower()
+        if endian not in ("little", "big"):
+            fail("%s: bad NRRD endian '%s'" % (path, fields["endian"]))
+        dtype = np.dtype(("<" if endian == "little" else ">") + kind)
+        if dtype.itemsize > 1 and "endian" not in fields:
+            fail("%s: the NRRD header has no 'endian' field" % path)
+        data = f.read()
+    if encoding != "raw":
+        try:
+            data = gzip.decompress(data)
+        except (OSError, EOFError, zlib.error) as e:
+            fail("%s: cannot read: bad gzip data: %s" % (path, e))
+    count = sizes[0] * sizes[1] * sizes[2]
+    if len(data) < count * dtype.itemsize:
+        fail("%s: cannot read: %d bytes of data, %d expected" % (path, len(data), count * dtype.itemsize))
+    labels = np.frombuffer(data, dtype, count).reshape(sizes[::-1]).transpose(2, 1, 0)
+    hdr.spacings = nrrd_spacings(path, fields)
+    return hdr, labels
+
+
+def nrrd_spacings(path, fields):
+    """Each axis's voxel spacing: the length of its space direction, else its 'spacings'
+    entry, else 1."""
+    if "spacedirections" in fields:
+        import re
+        parts = re.findall(r"\(([^)]*)\)|(none)", fields["spacedirections"])
+        if len(parts) != 3 or any(not vector for vector, _ in parts):
+            fail("%s: NRRD space directions '%s': three vectors expected"
+                 % (path, fields["spacedirections"]))
+        try:
+            return [float(np.linalg.norm([float(v) for v in vector.split(",")])) for vector, _ in parts]
+        except ValueError:
+            fail("%s: bad NRRD space directions '%s'" % (path, fields["spacedirections"]))
+    if "spacings" in fields:
+        try:
+            values = [float(v) for v in fields["spacings"].split()]
+        except ValueError:
+            fail("%s: bad NRRD spacings '%s'" % (path, fields["spacings"]))
+        if len(values) == 3:
+            return [v if np.isfinite(v) and v > 0 else 1.0 for v in values]
+    return [1.0, 1.0, 1.0]
+
+
+def write_nrrd(hdr, data, path):
+    """uint8 labels [i, j, k] as a gzip NRRD with the input's header lines and key/value pairs
+    in order (its geometry too); type, encoding and endian changed, no data file or skips."""
+    out = [hdr.magic if hdr.magic >= "NRRD0004" else "NRRD0004"]
+    # 3D Slicer's SegmentN_Extent (i0 i1 j0 j1 k0 k1) bounds segment N, whose voxels hold
+    # SegmentN_LabelValue: the filled segment may reach farther, so it is recomputed
+    values = dict((name[:-len("_LabelValue")], value) for what, name, value in hdr.lines
+                  if what == "kv" and name.endswith("_LabelValue"))
+    for what, name, value in hdr.lines:
+        if what == "kv" and name.endswith("_Extent") and name[:-len("_Extent")] in values:
+            try:
+                where = np.nonzero(np.asarray(data) == int(values[name[:-len("_Extent")]]))
+            except ValueError:
+                where = None
+            if where is not None:
+                value = " ".join("%d %d" % (w.min(), w.max()) if w.size else "0 -1" for w in where)
+                out.append("%s:=%s" % (name, value))
+                continue
+        low = name.lower().replace(" ", "") if what == "field" else None
+        if what == "comment":
+            out.append(name)
+        elif what == "kv":
+            out.append("%s:=%s" % (name, value))
+        elif low in ("datafile", "datafiles", "byteskip", "lineskip"):
+            continue
+        elif low == "type":
+            out.append("%s: uint8" % name)
+        elif low == "encoding":
+            out.append("%s: gzip" % name)
+            if "endian" not in hdr.fields:
+                out.append("endian: little")
+        elif low == "endian":
+            out.append("%s: little" % name)
+        else:
+            out.append("%s: %s" % (name, value))
+    with open(path, "wb") as f:
+        f.write(("\n".join(out) + "\n\n").encode("latin-1"))
+        f.write(gzip.compress(np.asarray(data, np.uint8).tobytes(order="F"), 6))
 
 
 def parse_slices(text, count):
@@ -255,20 +440,34 @@ def main():
     value = args.label if args.label is not None else 1
     if value != "all" and not 0 < value < 256:
         fail("--label %d does not fit the uint8 output (1 .. 255)" % value, 2)
-    try:
-        import nibabel
-    except ImportError:
-        fail("needs nibabel (Debian: python3-nibabel)")
-    try:
-        image = nibabel.load(args.labels)
-        labels = np.asanyarray(image.dataobj)
-    except Exception as e:  # nibabel raises several kinds
-        fail("%s: cannot read: %s" % (args.labels, e))
-    if labels.ndim == 4 and labels.shape[3] == 1:
-        labels = labels[..., 0]
-    if labels.ndim != 3:
-        fail("%s: a 3D volume is needed, this one has shape %s" % (args.labels, labels.shape))
-    zooms = [float(v) for v in image.header.get_zooms()[:3]]
+    if is_nrrd(args.labels) != is_nrrd(args.out) or args.out.lower().endswith(".nhdr"):
+        # NRRD's geometry is usually in LPS, NIfTI's in RAS: no conversion here
+        fail("write OUT with the input's format: %s" % (".nrrd / .seg.nrrd" if is_nrrd(args.labels)
+                                                        else ".nii / .nii.gz"))
+    if is_nrrd(args.labels):
+        nrrd, labels = read_nrrd(args.labels)
+        zooms = nrrd.spacings
+
+        def save_volume(data):
+            write_nrrd(nrrd, data, args.out)
+    else:
+        try:
+            import nibabel
+        except ImportError:
+            fail("needs nibabel (Debian: python3-nibabel)")
+        try:
+            image = nibabel.load(args.labels)
+            labels = np.asanyarray(image.dataobj)
+        except Exception as e:  # nibabel raises several kinds
+            fail("%s: cannot read: %s" % (args.labels, e))
+        if labels.ndim == 4 and labels.shape[3] == 1:
+            labels = labels[..., 0]
+        if labels.ndim != 3:
+            fail("%s: a 3D volume is needed, this one has shape %s" % (args.labels, labels.shape))
+        zooms = [float(v) for v in image.header.get_zooms()[:3]]
+
+        def save_volume(data):
+            save(nibabel, image, data, args.out)
     axis = args.axis if args.axis is not None else max((zooms[a], a) for a in (0, 1, 2))[1]
     plane = [a for a in (0, 1, 2) if a != axis]
     sx, sy, sz = zooms[plane[0]], zooms[plane[1]], zooms[axis]
@@ -280,7 +479,7 @@ def main():
         try:
             stack = np.moveaxis(labels, axis, 0)  # (slice, i, j): slice k is stack[k]
             values, picked, result = fill_all(args, extra, labels, stack, sx, sz, work)
-            save(nibabel, image, np.moveaxis(result, 0, axis), args.out)
+            save_volume(np.moveaxis(result, 0, axis))
         finally:
             if not args.keep:
                 shutil.rmtree(work, ignore_errors=True)
@@ -299,7 +498,8 @@ def main():
     try:
         src = os.path.join(work, "slices")
         out = os.path.join(work, "out")
-        os.makedirs(src, exist_ok=True)
+        shutil.rmtree(src, ignore_errors=True)  # no slices left from an earlier --keep run
+        os.makedirs(src)
         for n, k in enumerate(picked):
             # PNG rows run along the second in-plane axis, columns along the first
             write_png(os.path.join(src, "%05d.png" % n), stack[k].T)
@@ -318,7 +518,7 @@ def main():
                  % (nz, picked[-1] - picked[0] + 1, picked[0], picked[-1]))
         result = np.zeros(stack.shape, np.uint8)
         result[picked[0]:picked[-1] + 1] = np.where(filled.transpose(0, 2, 1) == 255, value, 0)
-        save(nibabel, image, np.moveaxis(result, 0, axis), args.out)
+        save_volume(np.moveaxis(result, 0, axis))
     finally:
         if not args.keep:
             shutil.rmtree(work, ignore_errors=True)

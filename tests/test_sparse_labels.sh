@@ -4,8 +4,11 @@
 # every slice) is filled back into the volume's grid; then the same across
 # axis 0 with --slices; then --label all on a multi-label atlas (touching,
 # nested, one-slice and edge labels; labels far apart along the axis; one
-# label alone against --label L); then the refusals.  Needs nibabel
-# (python3-nibabel).
+# label alone against --label L); then the ellipsoid and the atlas as NRRD
+# (raw and gzip, 3D Slicer-like key/value pairs) against the NIfTI runs, read
+# back by the script's reader and VTK's vtkNrrdReader; a reused --keep folder;
+# then the refusals (NIfTI and NRRD).  Needs nibabel (python3-nibabel); VTK
+# (python3-vtk9) for the vtkNrrdReader checks, left out without it.
 #   sh tests/test_sparse_labels.sh BUILD_DIR
 # Prints "sparse-labels: N passed, N failed".
 set -u
@@ -219,6 +222,125 @@ import sys, numpy as np, nibabel as nib
 a, b = (np.asarray(nib.load(f).dataobj) for f in sys.argv[1:])
 sys.exit(not (np.array_equal(a, b) and (a == 1).sum() > 50000))' "$TMP/one-all.nii" "$TMP/one-1.nii"
 
+# ---- NRRD (3D Slicer's .nrrd / .seg.nrrd) ----------------------------------------------------------
+# make_nrrd SRC.nii OUT raw|gzip [4d|ascii|nhdr]: SRC's labels as a NRRD, written here independently of
+# the script: int16 ("short", big-endian when gzip), the NIfTI's affine turned to LPS as oblique space
+# directions and origin, a comment and Slicer-like key/value pairs (one SegmentN_LabelValue per label)
+make_nrrd() {
+  "$PY" - "$@" <<'PYEOF'
+import gzip, sys, numpy as np, nibabel as nib
+src, out, enc = sys.argv[1:4]
+bad = sys.argv[4] if len(sys.argv) > 4 else ""
+img = nib.load(src)
+lab = np.asarray(img.dataobj).astype(np.int16)
+aff = np.diag([-1.0, -1.0, 1.0, 1.0]) @ img.affine  # RAS -> LPS
+vec = lambda v: "(" + ",".join(repr(float(x)) for x in v) + ")"
+sizes = list(lab.shape)
+dirs = " ".join(vec(aff[:3, a]) for a in (0, 1, 2))
+if bad == "4d":
+    lab, sizes, dirs = np.stack([lab, lab]), [2] + sizes, "none " + dirs
+values = [int(v) for v in np.unique(lab) if v]
+head = ["NRRD0004", "# a test volume", "type: %s" % ("int16" if enc == "raw" else "short"),
+        "dimension: %d" % len(sizes), "space: left-posterior-superior",
+        "sizes: " + " ".join(map(str, sizes)), "space directions: " + dirs,
+        "kinds: " + ("list " if bad == "4d" else "") + "domain domain domain",
+        "endian: " + ("little" if enc == "raw" else "big"),
+        "encoding: " + ("ascii" if bad == "ascii" else enc), "space origin: " + vec(aff[:3, 3])]
+head += ["Segment%d_ID:=Segment_%d" % (n, v) for n, v in enumerate(values)]
+head += ["Segment%d_LabelValue:=%d" % (n, v) for n, v in enumerate(values)]
+# Slicer's extents bound each segment's drawn voxels: the filled ones reach farther
+box = lambda m: " ".join("%d %d" % (w.min(), w.max()) for w in np.nonzero(m)[-3:])
+head += ["Segment%d_Extent:=%s" % (n, box(lab == v)) for n, v in enumerate(values)]
+data = lab.astype("<i2" if enc == "raw" else ">i2").tobytes(order="F")
+if bad == "nhdr":
+    head.append("data file: " + out.rsplit("/", 1)[-1] + ".raw")
+    open(out + ".raw", "wb").write(data)
+    data = b""
+elif bad == "ascii":
+    data = " ".join(map(str, lab.ravel(order="F"))).encode()
+elif enc == "gzip":
+    data = gzip.compress(data)
+open(out, "wb").write(("\n".join(head) + "\n\n").encode() + data)
+PYEOF
+}
+
+# verify_nrrd IN.nrrd OUT.nrrd NIFTI_OUT: OUT's labels identical to the NIfTI run's (read by the
+# script's reader and by VTK's vtkNrrdReader, with VTK's spacing and origin), its header IN's
+# with type uint8, encoding gzip and endian little
+verify_nrrd() {
+  "$PY" - "$SCRIPT" "$@" <<'PYEOF'
+import os, sys, numpy as np, nibabel as nib
+sys.dont_write_bytecode = True  # no __pycache__ in examples/
+sys.path.insert(0, os.path.dirname(sys.argv[1]))
+import sparse_labels
+src, out, ref = sys.argv[2:5]
+name = os.path.basename(out)
+def rep(good, what): print(("ok - " if good else "FAIL - ") + name + ": " + what)
+def header(path):
+    raw = open(path, "rb").read()
+    end = raw.index(b"\n\n")
+    return raw[:end].decode().split("\n"), raw[end + 2:]
+want = np.asarray(nib.load(ref).dataobj)
+hdr, got = sparse_labels.read_nrrd(out)
+rep(got.dtype == np.uint8 and np.array_equal(got, want),
+    "labels identical to the NIfTI run's (%d voxels labelled)" % (want > 0).sum())
+a, _ = header(src)
+b, _ = header(out)
+same = lambda l: l.split(":")[0] not in ("type", "encoding", "endian") and "_Extent:=" not in l
+rep([l for l in b if same(l)] == [l for l in a if same(l)],
+    "the input's header lines, in order (space, directions, origin, key/value pairs)")
+kv = dict(l.split(":=", 1) for l in b if ":=" in l)
+extents = [(k, kv[k], kv[k[:-len("_Extent")] + "_LabelValue"]) for k in kv if k.endswith("_Extent")]
+boxes = [" ".join("%d %d" % (w.min(), w.max()) if w.size else "0 -1" for w in np.nonzero(got == int(v)))
+         for _, _, v in extents]
+rep(extents and all(e == x for (_, e, _), x in zip(extents, boxes)) and any(e not in a for e in
+    ["%s:=%s" % (k, e) for k, e, _ in extents]),
+    "SegmentN_Extent recomputed as the filled segment's bounds (%s)" % ", ".join(e for _, e, _ in extents))
+rep("type: uint8" in b and "encoding: gzip" in b and "endian: little" in b, "type uint8, encoding gzip")
+rep(any(l.startswith("Segment0_LabelValue:=") for l in b), "Segment0_LabelValue kept")
+# Debian's vtkNrrdReader is an MPI reader: it needs a controller (no VTK: these checks left out)
+try:
+    import vtk
+except ImportError:
+    sys.exit()
+ctrl = vtk.vtkDummyController()
+vtk.vtkMultiProcessController.SetGlobalController(ctrl)
+r = vtk.vtkNrrdReader()
+r.SetFileName(out)
+r.Update()
+img = r.GetOutput()
+from vtk.util.numpy_support import vtk_to_numpy
+dims = img.GetDimensions()
+v = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(dims[::-1]).transpose(2, 1, 0)
+rep(tuple(dims) == want.shape and np.array_equal(v, want), "vtkNrrdReader reads the same labels")
+lps = np.diag([-1.0, -1.0, 1.0, 1.0]) @ nib.load(ref).affine
+rep(np.allclose(img.GetSpacing(), np.linalg.norm(lps[:3, :3], axis=0))
+    and np.allclose(img.GetOrigin(), lps[:3, 3]), "vtkNrrdReader: spacing %s, origin %s"
+    % (np.round(img.GetSpacing(), 4).tolist(), np.round(img.GetOrigin(), 4).tolist()))
+PYEOF
+}
+
+make_nrrd "$TMP/z.nii.gz" "$TMP/z.nrrd" raw
+make_nrrd "$TMP/z.nii.gz" "$TMP/z-gz.seg.nrrd" gzip
+make_nrrd "$TMP/atlas.nii.gz" "$TMP/atlas.nrrd" raw
+make_nrrd "$TMP/atlas.nii.gz" "$TMP/atlas.seg.nrrd" gzip
+for f in z z-gz.seg atlas atlas.seg; do
+  case $f in z*) opt=3 ref=z-out.nii.gz ;; *) opt=all ref=atlas-out.nii.gz ;; esac
+  "$PY" "$SCRIPT" "$TMP/$f.nrrd" "$TMP/out-$f.nrrd" --label $opt --lsmorph "$LSM" >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "nrrd $f, --label $opt: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+  [ $rc -eq 0 ] && run_checks "$TMP/log" verify_nrrd "$TMP/$f.nrrd" "$TMP/out-$f.nrrd" "$TMP/$ref"
+done
+
+# --keep reused by a run with fewer slices: no stale slices left in KEEP/slices
+"$PY" "$SCRIPT" "$TMP/z.nii.gz" "$TMP/k.nii" --label 3 --slices 0:59:2 --keep "$TMP/k" --lsmorph "$LSM" -- -q \
+  >"$TMP/o" 2>"$TMP/e" &&
+  "$PY" "$SCRIPT" "$TMP/z.nii.gz" "$TMP/k.nii" --label 3 --keep "$TMP/k" --lsmorph "$LSM" -- -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--keep reused: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+n=$(ls "$TMP/k/slices" | wc -l)
+check "--keep reused: $n slices in slices/, as many as drawn" grep -q "^sparse_labels.py: $n drawn slices" "$TMP/o"
+
 # ---- refusals -------------------------------------------------------------------------------------
 expect_fail() { # DESC RC PHRASE ARGS...
   desc=$1 want=$2 phrase=$3
@@ -238,5 +360,14 @@ expect_fail "all: a label above 255" 1 "integers 1 .. 255 (the uint8 output), th
 check "all: a label above 255: one error line" [ "$(wc -l <"$TMP/e")" -eq 1 ]
 expect_fail "all: a label 2.5" 1 "this volume has 2.5" "$TMP/half.nii" "$TMP/no.nii" --label all
 expect_fail "bad --label" 2 "--label: 'x' is not a label number or 'all'" "$TMP/z.nii.gz" "$TMP/no.nii" --label x
-check "no output after a refusal" [ ! -e "$TMP/no.nii" ]
+make_nrrd "$TMP/z.nii.gz" "$TMP/d.nhdr" raw nhdr
+make_nrrd "$TMP/z.nii.gz" "$TMP/a.nrrd" raw ascii
+make_nrrd "$TMP/z.nii.gz" "$TMP/l.seg.nrrd" raw 4d
+expect_fail "nrrd: a detached header" 1 "a detached NRRD header (.nhdr) is not supported" "$TMP/d.nhdr" "$TMP/no.nrrd"
+expect_fail "nrrd: ascii encoding" 1 "NRRD encoding 'ascii' is not supported" "$TMP/a.nrrd" "$TMP/no.nrrd"
+expect_fail "nrrd: 4D layers" 1 "export the segmentation as a labelmap" "$TMP/l.seg.nrrd" "$TMP/no.nrrd"
+expect_fail "nrrd in, nifti out" 1 "write OUT with the input's format: .nrrd / .seg.nrrd" "$TMP/z.nrrd" "$TMP/no.nii"
+check "nrrd in, nifti out: one error line" [ "$(wc -l <"$TMP/e")" -eq 1 ]
+expect_fail "nifti in, nrrd out" 1 "write OUT with the input's format: .nii" "$TMP/z.nii.gz" "$TMP/no.nrrd"
+check "no output after a refusal" [ ! -e "$TMP/no.nii" -a ! -e "$TMP/no.nrrd" ]
 finish
