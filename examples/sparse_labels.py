@@ -345,6 +345,31 @@ def read_volume(out, dtype):
              "the options after \"--\"?): %s" % (out, e))
 
 
+def run_lsmorph(args, options, masks, run, sx, sz, base, values, dtype, what=""):
+    """Runs lsmorph on masks (slice k of the volume -> boolean array (i, j)) of the slices in
+    run, with heights k * sz, in folder base; returns its volume as (slice, i, j), one slice per
+    volume slice from run[0] to run[-1].  what names the label in messages ("" for one)."""
+    src, out = os.path.join(base, "slices"), os.path.join(base, "out")
+    shutil.rmtree(src, ignore_errors=True)  # no slices left from an earlier --keep run
+    os.makedirs(src)
+    for n, k in enumerate(run):
+        # PNG rows run along the second in-plane axis, columns along the first
+        write_png(os.path.join(src, "%05d.png" % n), masks(k).T)
+    with open(os.path.join(base, "heights.txt"), "w") as f:
+        f.write("".join("%.17g\n" % (k * sz) for k in run))
+    cmd = [args.lsmorph, "reconstruct", src, "-o", out, "--heights", os.path.join(base, "heights.txt"),
+           "--pixel-size", repr(sx), "--dz", repr(sz), "--values", values, "--format", "raw",
+           "--no-preview", "--no-slices"] + options
+    done = subprocess.run(cmd)
+    if done.returncode != 0:
+        fail("lsmorph failed%s (exit %d): %s" % (what, done.returncode, " ".join(cmd)))
+    volume = read_volume(out, dtype)
+    if volume.shape[0] != run[-1] - run[0] + 1:
+        fail("lsmorph wrote %d slices%s, expected %d (slices %d .. %d)"
+             % (volume.shape[0], what, run[-1] - run[0] + 1, run[0], run[-1]))
+    return volume.transpose(0, 2, 1)
+
+
 def fill_all(args, extra, labels, stack, sx, sz, work):
     """--label all: (picked slices, uint8 stack (slice, i, j)), one lsmorph run per label."""
     values = atlas_labels(labels, args.labels)
@@ -387,24 +412,8 @@ def fill_all(args, extra, labels, stack, sx, sz, work):
               % (value, count, len(values), run[0], run[-1]), file=sys.stderr)
         sys.stderr.flush()
         base = os.path.join(work, "label-%03d" % value)
-        src, out = os.path.join(base, "slices"), os.path.join(base, "out")
-        shutil.rmtree(src, ignore_errors=True)  # no slices left from an earlier --keep run
-        os.makedirs(src)
-        for n, k in enumerate(run):
-            write_png(os.path.join(src, "%05d.png" % n), (stack[k] == value).T)
-        with open(os.path.join(base, "heights.txt"), "w") as f:
-            f.write("".join("%.17g\n" % (k * sz) for k in run))
-        cmd = [args.lsmorph, "reconstruct", src, "-o", out, "--heights", os.path.join(base, "heights.txt"),
-               "--pixel-size", repr(sx), "--dz", repr(sz), "--values", "sdf", "--format", "raw",
-               "--no-preview", "--no-slices"] + (extra or ["-q"])
-        done = subprocess.run(cmd)
-        if done.returncode != 0:
-            fail("lsmorph failed on label %d (exit %d): %s" % (value, done.returncode, " ".join(cmd)))
-        sdf = read_volume(out, "<f4")
-        if sdf.shape[0] != run[-1] - run[0] + 1:
-            fail("lsmorph wrote %d slices for label %d, expected %d (slices %d .. %d)"
-                 % (sdf.shape[0], value, run[-1] - run[0] + 1, run[0], run[-1]))
-        sdf = sdf.transpose(0, 2, 1)
+        sdf = run_lsmorph(args, extra or ["-q"], lambda k: stack[k] == value, run, sx, sz, base,
+                          "sdf", "<f4", " on label %d" % value)
         part = best[run[0]:run[-1] + 1]
         lower = sdf < part
         part[lower] = sdf[lower]
@@ -496,28 +505,9 @@ def main():
 
     work = args.keep or tempfile.mkdtemp(prefix="sparse-labels-")
     try:
-        src = os.path.join(work, "slices")
-        out = os.path.join(work, "out")
-        shutil.rmtree(src, ignore_errors=True)  # no slices left from an earlier --keep run
-        os.makedirs(src)
-        for n, k in enumerate(picked):
-            # PNG rows run along the second in-plane axis, columns along the first
-            write_png(os.path.join(src, "%05d.png" % n), stack[k].T)
-        with open(os.path.join(work, "heights.txt"), "w") as f:
-            f.write("".join("%.17g\n" % (k * sz) for k in picked))
-        cmd = [args.lsmorph, "reconstruct", src, "-o", out, "--heights", os.path.join(work, "heights.txt"),
-               "--pixel-size", repr(sx), "--dz", repr(sz), "--values", "mask", "--format", "raw",
-               "--no-preview", "--no-slices"] + extra
-        run = subprocess.run(cmd)
-        if run.returncode != 0:
-            fail("lsmorph failed (exit %d): %s" % (run.returncode, " ".join(cmd)))
-        filled = read_volume(out, np.uint8)
-        nz = filled.shape[0]
-        if nz != picked[-1] - picked[0] + 1:
-            fail("lsmorph wrote %d slices, expected %d (slices %d .. %d)"
-                 % (nz, picked[-1] - picked[0] + 1, picked[0], picked[-1]))
+        filled = run_lsmorph(args, extra, lambda k: stack[k], picked, sx, sz, work, "mask", np.uint8)
         result = np.zeros(stack.shape, np.uint8)
-        result[picked[0]:picked[-1] + 1] = np.where(filled.transpose(0, 2, 1) == 255, value, 0)
+        result[picked[0]:picked[-1] + 1] = np.where(filled == 255, value, 0)
         save_volume(np.moveaxis(result, 0, axis))
     finally:
         if not args.keep:
