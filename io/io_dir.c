@@ -53,6 +53,20 @@ static const char *base_name(const char *path) {
   return slash ? slash + 1 : path;
 }
 
+int lsm_name_number(const char *path, uint64_t *number) {
+  const char *name = base_name(path), *dot = strrchr(name, '.');
+  const char *end = dot && dot != name ? dot : name + strlen(name);
+  while (end > name && !is_digit(end[-1])) --end;
+  const char *start = end;
+  while (start > name && is_digit(start[-1])) --start;
+  while (start + 1 < end && *start == '0') ++start; /* leading zeros */
+  if (start == end || end - start > 18) return 0;
+  uint64_t n = 0;
+  for (const char *c = start; c < end; ++c) n = 10u * n + (uint64_t)(*c - '0');
+  *number = n;
+  return 1;
+}
+
 static int cmp_paths(const void *a, const void *b) {
   const char *pa = *(const char *const *)a, *pb = *(const char *const *)b;
   return lsm_natural_cmp(base_name(pa), base_name(pb));

@@ -46,7 +46,9 @@ static const char reconstruct_help[] =
     "                         contours, holes, islands in holes)\n"
     "  --invert               foreground is dark (default: luminance >= 50 %; label\n"
     "                         masks stored as 0/1 are read as non-zero = foreground)\n"
-    "  --spacing Z            distance between consecutive slices (default 1)\n"
+    "  --spacing Z            distance between consecutive slices (default 1; not\n"
+    "                         taken from the file names: a note says when they number\n"
+    "                         the slices with gaps, 001.png 009.png ...)\n"
     "  --heights FILE         one height per slice, strictly increasing (overrides\n"
     "                         --spacing); blank lines and # comments allowed\n"
     "  --pixel-size S         physical size of a pixel (default 1); all distances,\n"
@@ -64,7 +66,10 @@ static const char reconstruct_help[] =
     "                         (default 17179869184 = 2^34; with --per-iteration,\n"
     "                         whose slice count is not known ahead, the run stops\n"
     "                         with an error when the next slice would pass N)\n"
-    "\n"
+    "\n";
+
+/* (the help is split: C17 compilers need to support string literals of 4095 bytes only) */
+static const char reconstruct_help_output[] =
     "Output:\n"
     "  --dz Z                 output slice spacing (default: the pixel size, isotropic\n"
     "                         voxels); output heights are z0, z0+dz, ... up to the last\n"
@@ -242,6 +247,7 @@ static const char devices_help[] =
 void lsm_cli_help(FILE *f, const char *topic) {
   if (topic && strcmp(topic, "reconstruct") == 0) {
     fputs(reconstruct_help, f);
+    fputs(reconstruct_help_output, f);
     fputs(reconstruct_help_method, f);
     fputs(reconstruct_help_running, f);
     fputs(reconstruct_help_files, f);
@@ -527,6 +533,7 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     if (!cli->pls_option) cli->pls_option = listed(name, pls_options);
     cli->tol_given |= IS("--tol");
     cli->device_given |= IS("--device");
+    cli->spacing_given |= IS("--spacing");
 #undef NEEDS_VALUE
 #undef IS
   }

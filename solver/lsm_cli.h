@@ -45,7 +45,7 @@ typedef struct lsm_cli {
    * first solver option (--scheme, --time, --cfl, --max-iter, --reinit-*), the
    * first particle option (--particles-per-cell, --pls-*, --seed) */
   const char *solver_option, *pls_option;
-  int tol_given, device_given;
+  int tol_given, device_given, spacing_given;
   /* score */
   const char *truth_dir;
   const char *result_dir;

@@ -5,8 +5,8 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
-#include <inttypes.h>
 #include <ftw.h>
+#include <inttypes.h>
 #if defined(__GLIBC__) || defined(__linux__)
 #include <malloc.h>
 #endif
@@ -231,6 +231,42 @@ static void note_filled_outlines(const png_source *src, const char *dir) {
               dir, base_name(src->paths[k]), 100.0 * (double)interior / (double)fg);
     return;
   }
+}
+
+/* Without --spacing or --heights, consecutive files are one unit apart.  A
+ * note when the file names number the slices with gaps (001.png, 009.png,
+ * ..., every 8th of a scan kept under its own names): that is most likely
+ * where they lie, and the run would then fill nothing between them.  Only
+ * when every name ends with a number and the numbers increase. */
+static void note_numbered_names(const png_source *src, const char *dir) {
+  uint64_t first = 0, previous = 0, step = 0;
+  int even = 1;
+  for (size_t k = 0; k < src->count; ++k) {
+    uint64_t n;
+    if (!lsm_name_number(src->paths[k], &n) || (k > 0 && n <= previous)) return;
+    if (k == 0)
+      first = n;
+    else if (k == 1)
+      step = n - previous;
+    else if (n - previous != step)
+      even = 0;
+    previous = n;
+  }
+  if (even && step == 1) return; /* consecutive: what the default assumes */
+  if (even)
+    fprintf(stderr,
+            "lsmorph: note: %s: the file names number the slices %" PRIu64 ", %" PRIu64
+            ", ... %" PRIu64 " (steps of %" PRIu64 "), but without --spacing or --heights "
+            "consecutive files are 1 apart; if the numbers are the slices' indices in the scan, give --spacing %" PRIu64 " times the slice "
+            "thickness (--spacing %" PRIu64 " for slices one pixel thick)\n",
+            dir, first, first + step, previous, step, step, step);
+  else
+    fprintf(stderr,
+            "lsmorph: note: %s: the file names number the slices %" PRIu64 " to %" PRIu64
+            " unevenly, but without --spacing or --heights consecutive files are 1 apart; if "
+            "the numbers are the slices' indices in the scan, give their heights with "
+            "--heights FILE (one per line)\n",
+            dir, first, previous);
 }
 
 static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
@@ -916,6 +952,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     st = pick_foreground(src.paths, src.count, &src.read, cli->quiet, cli->slice_dir, err);
   if (st == LSM_OK && !cli->quiet) {
     if (cli->stack.input == LSM_INPUT_OUTLINE) note_filled_outlines(&src, cli->slice_dir);
+    if (!cli->heights_file && !cli->spacing_given) note_numbered_names(&src, cli->slice_dir);
     if (cli->stack.per_iteration && cli->stack.dz > 0)
       fprintf(stderr, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
                       "iteration is a slice)\n");

@@ -326,6 +326,37 @@ check "--per-iteration --interp cubic: a note says it has no effect" grep -q "no
 check "--per-iteration --interp cubic: run.json says linear" grep -q '"interp": "linear", "ends": "halfway"' "$TMP/out-iter-cubic/run.json"
 check "--per-iteration --interp cubic: the same volume" cmp -s "$TMP/out-iter/volume.nrrd" "$TMP/out-iter-cubic/volume.nrrd"
 
+# Files numbered with gaps (every 8th slice kept under its own name) and no --spacing or
+# --heights: a note says how to place them; none once placed, none for consecutive numbers.
+mkdir -p "$TMP/numbered" "$TMP/numbered-uneven" "$TMP/numbered-consecutive"
+for n in 1 2 3; do
+  cp "$SET/00$n.png" "$TMP/numbered/slice_$(printf %03d $((8 * n - 7))).png"
+  cp "$SET/00$n.png" "$TMP/numbered-consecutive/slice_$(printf %03d $((n + 4))).png"
+done
+cp "$SET/001.png" "$TMP/numbered-uneven/a1.png"
+cp "$SET/002.png" "$TMP/numbered-uneven/a3.png"
+cp "$SET/003.png" "$TMP/numbered-uneven/a10.png"
+"$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-numbered" --input outline --no-preview \
+  >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "numbered 1, 9, 17 exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "numbered 1, 9, 17: a note suggests --spacing 8" \
+  grep -q "note: .*numbered: the file names number the slices 1, 9, ... 17 (steps of 8), .*give --spacing 8 times the slice thickness" "$TMP/e"
+"$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-numbered-8" --input outline --no-preview \
+  --spacing 8 >"$TMP/o" 2>"$TMP/e"
+check "numbered, --spacing 8: no such note" sh -c "! grep -q 'file names number' '$TMP/e'"
+check "numbered, --spacing 8: 17 slices" [ "$(lines "$TMP/out-numbered-8/heights.txt")" -eq 17 ]
+"$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-numbered-q" --input outline --no-preview -q \
+  >"$TMP/o" 2>"$TMP/e"
+check "numbered, -q: nothing on stderr" [ ! -s "$TMP/e" ]
+"$LSM" reconstruct "$TMP/numbered-uneven" -o "$TMP/out-uneven" --input outline --no-preview \
+  >"$TMP/o" 2>"$TMP/e"
+check "numbered 1, 3, 10: a note suggests --heights" \
+  grep -q "note: .*numbered-uneven: the file names number the slices 1 to 10 unevenly, .*--heights FILE" "$TMP/e"
+"$LSM" reconstruct "$TMP/numbered-consecutive" -o "$TMP/out-consecutive" --input outline \
+  --no-preview >"$TMP/o" 2>"$TMP/e"
+check "numbered 5, 6, 7: no note about the names" sh -c "! grep -q 'file names number' '$TMP/e'"
+
 # --ends changes only gaps next to an empty slice: the pyramid has none.
 "$LSM" reconstruct "$SET" -o "$TMP/out-halfway" --input outline --heights "$SET/heights.txt" \
   --dz 10 --ends halfway -q >"$TMP/o" 2>"$TMP/e"

@@ -212,6 +212,32 @@ static void test_natural_cmp(void **state) {
   for (size_t i = 0; i < n; ++i) assert_string_equal(sorted[i], want[i]);
 }
 
+/* The number a slice's file name ends with (the note on numbered names). */
+static void test_name_number(void **state) {
+  (void)state;
+  uint64_t n = 12345;
+  assert_int_equal(lsm_name_number("dir/slice_0009.png", &n), 1);
+  assert_true(n == 9);
+  assert_int_equal(lsm_name_number("12b.png", &n), 1); /* the last run of digits */
+  assert_true(n == 12);
+  assert_int_equal(lsm_name_number("ct_2024_113.PNG", &n), 1);
+  assert_true(n == 113);
+  assert_int_equal(lsm_name_number("0000.png", &n), 1);
+  assert_true(n == 0);
+  assert_int_equal(lsm_name_number("x/7", &n), 1); /* no extension */
+  assert_true(n == 7);
+  assert_int_equal(lsm_name_number(".5.png", &n), 1);
+  assert_true(n == 5);
+  assert_int_equal(lsm_name_number("999999999999999999.png", &n), 1); /* 18 digits */
+  assert_true(n == UINT64_C(999999999999999999));
+  n = 42;
+  assert_int_equal(lsm_name_number("1234567890123456789.png", &n), 0); /* 19 digits */
+  assert_int_equal(lsm_name_number("slice.png", &n), 0);
+  assert_int_equal(lsm_name_number("d1r/a.png", &n), 0); /* digits in the folder only */
+  assert_int_equal(lsm_name_number("a.7z", &n), 0);     /* digits in the extension only */
+  assert_true(n == 42); /* untouched when there is no number */
+}
+
 /* ---- heights ----------------------------------------------------------------------- */
 
 static void test_heights_good(void **state) {
@@ -1430,6 +1456,7 @@ static void test_json_find_number(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_natural_cmp),
+      cmocka_unit_test(test_name_number),
       cmocka_unit_test(test_json_find_number),
       cmocka_unit_test(test_heights_good),
       cmocka_unit_test(test_heights_bad),
