@@ -46,11 +46,16 @@ static const char reconstruct_help[] =
     "                         contours, holes, islands in holes)\n"
     "  --invert               foreground is dark (default: luminance >= 50 %; label\n"
     "                         masks stored as 0/1 are read as non-zero = foreground)\n"
-    "  --spacing Z            distance between consecutive slices (default 1; not\n"
-    "                         taken from the file names: a note says when they number\n"
-    "                         the slices with gaps, 001.png 009.png ...)\n"
+    "  --spacing Z            distance between consecutive slices (default 1); with\n"
+    "                         --heights-from-names, between consecutive numbers\n"
     "  --heights FILE         one height per slice, strictly increasing (overrides\n"
     "                         --spacing); blank lines and # comments allowed\n"
+    "  --heights-from-names   each slice's height is the number its file name ends\n"
+    "                         with (slice_012.png: 12) times --spacing, for slices kept\n"
+    "                         under their index in the scan (001.png 009.png 017.png,\n"
+    "                         or unevenly); without it consecutive files are --spacing\n"
+    "                         apart whatever their names (a note says when the names\n"
+    "                         number the slices with gaps)\n"
     "  --pixel-size S         physical size of a pixel (default 1); all distances,\n"
     "                         heights and the output signed distance use this unit;\n"
     "                         the pixel size, --spacing, --dz and every gap between\n"
@@ -418,6 +423,8 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     } else if (IS("--heights")) {
       NEEDS_VALUE();
       cli->heights_file = v;
+    } else if (IS("--heights-from-names")) {
+      cli->heights_from_names = 1;
     } else if (IS("--pixel-size")) {
       NEEDS_VALUE();
       LSM_TRY(parse_length(name, v, &so->pixel_size, err));
@@ -545,6 +552,9 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: SLICE_DIR is empty");
   if (cli->heights_file && !*cli->heights_file)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--heights: the file name is empty");
+  if (cli->heights_file && cli->heights_from_names)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL,
+                    "--heights and --heights-from-names both place the slices: give one");
   if (so->per_iteration && so->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL,
                     "--per-iteration needs a level-set method (--method ls or pls)");

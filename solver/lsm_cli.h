@@ -26,6 +26,7 @@ typedef struct lsm_cli {
   const char *slice_dir;
   const char *out_dir;
   const char *heights_file;  /* --heights */
+  int heights_from_names;    /* --heights-from-names: the numbers the names end with */
   double spacing;            /* --spacing (uniform heights) */
   int invert;
   int quiet;

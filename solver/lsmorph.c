@@ -233,11 +233,60 @@ static void note_filled_outlines(const png_source *src, const char *dir) {
   }
 }
 
+/* The input slices' heights: --heights FILE, the numbers the file names end
+ * with times --spacing (--heights-from-names), or consecutive files --spacing
+ * apart.  Shared by rank 0 and the MPI workers, so that all agree.  *z_out is
+ * malloc'd with count values. */
+static lsm_status input_heights(const lsm_cli *cli, char *const *paths, size_t count,
+                                double **z_out, lsm_err *err) {
+  double *z = NULL;
+  *z_out = NULL;
+  if (cli->heights_file) {
+    size_t nz = 0;
+    LSM_TRY(lsm_heights_read(cli->heights_file, &z, &nz, err));
+    if (nz != count) {
+      free(z);
+      return lsm_fail(err, LSM_ERR_INPUT, cli->heights_file, "%zu heights for %zu slices in %s",
+                      nz, count, cli->slice_dir);
+    }
+    *z_out = z;
+    return LSM_OK;
+  }
+  z = lsm_alloc(count, sizeof *z, err, "heights");
+  if (!z) return err->status;
+  uint64_t previous = 0;
+  for (size_t k = 0; k < count; ++k) {
+    if (!cli->heights_from_names) {
+      z[k] = (double)k * cli->spacing;
+      continue;
+    }
+    uint64_t n = 0;
+    if (!lsm_name_number(paths[k], &n)) {
+      free(z);
+      return lsm_fail(err, LSM_ERR_INPUT, paths[k],
+                      "--heights-from-names: the file name does not end with a number "
+                      "(of at most 18 digits)");
+    }
+    if (k > 0 && n <= previous) {
+      free(z);
+      return lsm_fail(err, LSM_ERR_INPUT, paths[k],
+                      "--heights-from-names: its number %" PRIu64 " does not follow %s's %" PRIu64
+                      " (the numbers must increase in the files' natural order)",
+                      n, base_name(paths[k - 1]), previous);
+    }
+    previous = n;
+    z[k] = (double)n * cli->spacing;
+  }
+  *z_out = z;
+  return LSM_OK;
+}
+
 /* Without --spacing or --heights, consecutive files are one unit apart.  A
  * note when the file names number the slices with gaps (001.png, 009.png,
  * ..., every 8th of a scan kept under its own names): that is most likely
- * where they lie, and the run would then fill nothing between them.  Only
- * when every name ends with a number and the numbers increase. */
+ * where they lie (--heights-from-names), and the run would then fill nothing
+ * between them.  Only when every name ends with a number and the numbers
+ * increase. */
 static void note_numbered_names(const png_source *src, const char *dir) {
   uint64_t first = 0, previous = 0, step = 0;
   int even = 1;
@@ -253,20 +302,16 @@ static void note_numbered_names(const png_source *src, const char *dir) {
     previous = n;
   }
   if (even && step == 1) return; /* consecutive: what the default assumes */
+  fprintf(stderr, "lsmorph: note: %s: the file names number the slices ", dir);
   if (even)
-    fprintf(stderr,
-            "lsmorph: note: %s: the file names number the slices %" PRIu64 ", %" PRIu64
-            ", ... %" PRIu64 " (steps of %" PRIu64 "), but without --spacing or --heights "
-            "consecutive files are 1 apart; if the numbers are the slices' indices in the scan, give --spacing %" PRIu64 " times the slice "
-            "thickness (--spacing %" PRIu64 " for slices one pixel thick)\n",
-            dir, first, first + step, previous, step, step, step);
+    fprintf(stderr, "%" PRIu64 ", %" PRIu64 ", ... %" PRIu64 " (steps of %" PRIu64 ")", first,
+            first + step, previous, step);
   else
-    fprintf(stderr,
-            "lsmorph: note: %s: the file names number the slices %" PRIu64 " to %" PRIu64
-            " unevenly, but without --spacing or --heights consecutive files are 1 apart; if "
-            "the numbers are the slices' indices in the scan, give their heights with "
-            "--heights FILE (one per line)\n",
-            dir, first, previous);
+    fprintf(stderr, "%" PRIu64 " to %" PRIu64 " unevenly", first, previous);
+  fputs(", but without --spacing, --heights or --heights-from-names consecutive files are 1 "
+        "apart; if the numbers are the slices' indices in the scan, add --heights-from-names "
+        "(each height is then the number times --spacing, the slice thickness)\n",
+        stderr);
 }
 
 static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
@@ -449,8 +494,8 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   lsm_json_number(f, o->pixel_size);
   fputs(", \"dz\": ", f);
   lsm_json_number(f, lsm_stack_output_dz(o));
-  fprintf(f, ", \"invert\": %s, \"threads\": %d, \"values\": ", cli->invert ? "true" : "false",
-          threads);
+  fprintf(f, ", \"invert\": %s, \"heights_from_names\": %s, \"threads\": %d, \"values\": ",
+          cli->invert ? "true" : "false", cli->heights_from_names ? "true" : "false", threads);
   lsm_json_string(f, lsm_values_name((lsm_values)cli->values));
   fputs(", \"formats\": [", f);
   int listed = 0;
@@ -853,7 +898,6 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
                                      lsm_err *err) {
   png_source src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
   double *z = NULL;
-  size_t nz = 0;
   lsm_pair_stats *stats = NULL;
   lsm_backend *backend = NULL;
   int width = 0, height = 0;
@@ -868,18 +912,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
     lsm_path_list_free(src.paths, src.count);
     return LSM_OK;
   }
-  if (st == LSM_OK) {
-    if (cli->heights_file) {
-      st = lsm_heights_read(cli->heights_file, &z, &nz, err);
-      if (st == LSM_OK && nz != src.count)
-        st = lsm_fail(err, LSM_ERR_INPUT, cli->heights_file, "%zu heights for %zu slices", nz,
-                      src.count);
-    } else {
-      z = lsm_alloc(src.count, sizeof *z, err, "heights");
-      if (!z) st = err->status;
-      for (size_t k = 0; z && k < src.count; ++k) z[k] = (double)k * cli->spacing;
-    }
-  }
+  if (st == LSM_OK) st = input_heights(cli, src.paths, src.count, &z, err);
   if (st == LSM_OK) st = lsm_png_read_size(src.paths[0], &width, &height, err);
   if (st == LSM_OK) st = pick_foreground(src.paths, src.count, &src.read, 1, cli->slice_dir, err);
   const int threads = setup_run(cli);
@@ -919,7 +952,6 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   const double t_start = wall_seconds();
   png_source src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
   double *z = NULL;
-  size_t nz = 0;
   lsm_pair_stats *stats = NULL;
   out_sink sink;
   memset(&sink, 0, sizeof sink);
@@ -934,25 +966,15 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "no PNG files in this folder");
   if (st == LSM_OK && src.count == 1)
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "only one slice: need at least two to fill a gap");
-  if (st == LSM_OK) {
-    if (cli->heights_file) {
-      st = lsm_heights_read(cli->heights_file, &z, &nz, err);
-      if (st == LSM_OK && nz != src.count)
-        st = lsm_fail(err, LSM_ERR_INPUT, cli->heights_file,
-                      "%zu heights for %zu slices in %s", nz, src.count, cli->slice_dir);
-    } else {
-      z = lsm_alloc(src.count, sizeof *z, err, "heights");
-      if (!z) st = err->status;
-      for (size_t k = 0; z && k < src.count; ++k) z[k] = (double)k * cli->spacing;
-    }
-  }
+  if (st == LSM_OK) st = input_heights(cli, src.paths, src.count, &z, err);
   int width = 0, height = 0;
   if (st == LSM_OK) st = check_inputs(cli, &src, z, &width, &height, err);
   if (st == LSM_OK)
     st = pick_foreground(src.paths, src.count, &src.read, cli->quiet, cli->slice_dir, err);
   if (st == LSM_OK && !cli->quiet) {
     if (cli->stack.input == LSM_INPUT_OUTLINE) note_filled_outlines(&src, cli->slice_dir);
-    if (!cli->heights_file && !cli->spacing_given) note_numbered_names(&src, cli->slice_dir);
+    if (!cli->heights_file && !cli->spacing_given && !cli->heights_from_names)
+      note_numbered_names(&src, cli->slice_dir);
     if (cli->stack.per_iteration && cli->stack.dz > 0)
       fprintf(stderr, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
                       "iteration is a slice)\n");

@@ -340,8 +340,9 @@ cp "$SET/003.png" "$TMP/numbered-uneven/a10.png"
   >"$TMP/o" 2>"$TMP/e"
 rc=$?
 check "numbered 1, 9, 17 exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
-check "numbered 1, 9, 17: a note suggests --spacing 8" \
-  grep -q "note: .*numbered: the file names number the slices 1, 9, ... 17 (steps of 8), .*give --spacing 8 times the slice thickness" "$TMP/e"
+check "numbered 1, 9, 17: a note suggests --heights-from-names" \
+  grep -q "note: .*numbered: the file names number the slices 1, 9, ... 17 (steps of 8), .*add --heights-from-names" "$TMP/e"
+check "numbered 1, 9, 17 without placement: 3 slices" [ "$(lines "$TMP/out-numbered/heights.txt")" -eq 3 ]
 "$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-numbered-8" --input outline --no-preview \
   --spacing 8 >"$TMP/o" 2>"$TMP/e"
 check "numbered, --spacing 8: no such note" sh -c "! grep -q 'file names number' '$TMP/e'"
@@ -351,11 +352,59 @@ check "numbered, --spacing 8: 17 slices" [ "$(lines "$TMP/out-numbered-8/heights
 check "numbered, -q: nothing on stderr" [ ! -s "$TMP/e" ]
 "$LSM" reconstruct "$TMP/numbered-uneven" -o "$TMP/out-uneven" --input outline --no-preview \
   >"$TMP/o" 2>"$TMP/e"
-check "numbered 1, 3, 10: a note suggests --heights" \
-  grep -q "note: .*numbered-uneven: the file names number the slices 1 to 10 unevenly, .*--heights FILE" "$TMP/e"
+check "numbered 1, 3, 10: a note suggests --heights-from-names" \
+  grep -q "note: .*numbered-uneven: the file names number the slices 1 to 10 unevenly, .*add --heights-from-names" "$TMP/e"
 "$LSM" reconstruct "$TMP/numbered-consecutive" -o "$TMP/out-consecutive" --input outline \
   --no-preview >"$TMP/o" 2>"$TMP/e"
 check "numbered 5, 6, 7: no note about the names" sh -c "! grep -q 'file names number' '$TMP/e'"
+# --heights-from-names: the numbers times --spacing are the heights.
+"$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-names" --input outline --no-preview \
+  --heights-from-names >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--heights-from-names exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "--heights-from-names: no note about the names" sh -c "! grep -q 'file names number' '$TMP/e'"
+# (the samples after the 512-byte header; the origin differs: z 1 against 0)
+check "--heights-from-names on 1, 9, 17: the samples of --spacing 8" \
+  cmp -s -i 512 "$TMP/out-names/volume.nrrd" "$TMP/out-numbered-8/volume.nrrd"
+check "--heights-from-names: the origin at z 1" grep -aq "^space origin: (0,0,1)$" "$TMP/out-names/volume.nrrd"
+check "--heights-from-names: heights.txt starts at 1" [ "$(head -1 "$TMP/out-names/heights.txt")" = 1 ]
+check "--heights-from-names: run.json records it" grep -q '"heights_from_names": true' "$TMP/out-names/run.json"
+check "without it run.json says false" grep -q '"heights_from_names": false' "$TMP/out-numbered-8/run.json"
+"$LSM" reconstruct "$TMP/numbered-uneven" -o "$TMP/out-names-uneven" --input outline --no-preview \
+  --heights-from-names --spacing 2.5 --dz 2.5 -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--heights-from-names --spacing 2.5 on 1, 3, 10 exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
+check "--heights-from-names --spacing 2.5: input heights 2.5, 7.5, 25" \
+  grep -q '"heights": \[2.5, 7.5, 25\]' "$TMP/out-names-uneven/run.json"
+check "--heights-from-names --spacing 2.5 --dz 2.5: 10 slices, 2.5 to 25" \
+  [ "$(tr '\n' ' ' <"$TMP/out-names-uneven/heights.txt")" = "2.5 5 7.5 10 12.5 15 17.5 20 22.5 25 " ]
+mkdir -p "$TMP/names-bad" "$TMP/names-down"
+cp "$SET/001.png" "$TMP/names-bad/s1.png"
+cp "$SET/002.png" "$TMP/names-bad/top.png"
+"$LSM" reconstruct "$TMP/names-bad" -o "$TMP/out-names-bad" --input outline --heights-from-names \
+  >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--heights-from-names, a name without a number: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "--heights-from-names, a name without a number: the error names the file" \
+  grep -q "^lsmorph: error: .*names-bad/top.png: --heights-from-names: the file name does not end with a number" "$TMP/e"
+cp "$SET/001.png" "$TMP/names-down/a_12.png"
+cp "$SET/002.png" "$TMP/names-down/b_3.png"
+"$LSM" reconstruct "$TMP/names-down" -o "$TMP/out-names-down" --input outline --heights-from-names \
+  >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--heights-from-names, numbers falling in name order: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "--heights-from-names, numbers falling: the error says which" \
+  grep -q "^lsmorph: error: .*names-down/b_3.png: --heights-from-names: its number 3 does not follow a_12.png's 12" "$TMP/e"
+check "failed --heights-from-names runs wrote nothing" [ ! -e "$TMP/out-names-bad" ] && [ ! -e "$TMP/out-names-down" ]
+"$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-names-both" --heights "$SET/heights.txt" \
+  --heights-from-names >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--heights with --heights-from-names: usage error, exit 2 (got $rc)" [ $rc -eq 2 ]
+check "--heights with --heights-from-names: the error says give one" \
+  grep -q "^lsmorph: error: --heights and --heights-from-names both place the slices: give one" "$TMP/e"
+"$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-names-value" --heights-from-names=yes >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--heights-from-names=yes: usage error, exit 2 (got $rc)" [ $rc -eq 2 ]
 
 # --ends changes only gaps next to an empty slice: the pyramid has none.
 "$LSM" reconstruct "$SET" -o "$TMP/out-halfway" --input outline --heights "$SET/heights.txt" \

@@ -46,6 +46,15 @@ for n in 2 3; do
   check "default mode, $n ranks" same_result "$TMP/one" "$TMP/np$n"
 done
 check "run.json names the ranks" grep -q '"rank": 2' "$TMP/np3/run.json"
+# --heights-from-names: every rank reads the heights from the names alike (uneven numbers)
+mkdir "$TMP/named"
+i=0
+for n in 3 7 12 20 21 30 38 50; do i=$((i + 1)); cp "$TMP/in/$(printf %04d $i).png" "$TMP/named/s$n.png"; done
+run1 "$TMP/named" -o "$TMP/named1" --heights-from-names --threads 1
+check "--heights-from-names, one process: exit 0" [ $? -eq 0 ]
+runn 3 "$TMP/named" -o "$TMP/named3" --heights-from-names --threads 1
+check "--heights-from-names, 3 ranks" same_result "$TMP/named1" "$TMP/named3"
+check "--heights-from-names: 48 slices" [ "$(wc -l <"$TMP/named3/heights.txt")" -eq 48 ]
 run1 "$TMP/syn/pyramid" -o "$TMP/pone" --input outline --heights "$TMP/syn/pyramid/heights.txt" --per-iteration --threads 1
 check "per-iteration, one process: exit 0" [ $? -eq 0 ]
 for n in 2 3; do
