@@ -50,7 +50,6 @@ typedef struct lsm_cli {
   /* score */
   const char *truth_dir;
   const char *result_dir;
-  const char *keep;          /* --held-out-of: which truth slices were input */
   int stride;                /* score: input slices were every stride-th */
 } lsm_cli;
 

@@ -314,6 +314,17 @@ static void note_numbered_names(const png_source *src, const char *dir) {
         stderr);
 }
 
+/* A heights.txt among the slices (as examples/gen_synthetic writes them) is
+ * not read unless given with --heights: a note says so. */
+static void note_heights_beside(const char *dir) {
+  char path[4096];
+  struct stat sb;
+  const int n = snprintf(path, sizeof path, "%s/heights.txt", dir);
+  if (n > 0 && (size_t)n < sizeof path && stat(path, &sb) == 0 && S_ISREG(sb.st_mode))
+    fprintf(stderr, "lsmorph: note: %s is not read: the slices are 1 apart; give it with "
+                    "--heights to place them by it\n", path);
+}
+
 static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
   png_source *ps = ctx;
   LSM_TRY(check_stop(err));
@@ -973,8 +984,10 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     st = pick_foreground(src.paths, src.count, &src.read, cli->quiet, cli->slice_dir, err);
   if (st == LSM_OK && !cli->quiet) {
     if (cli->stack.input == LSM_INPUT_OUTLINE) note_filled_outlines(&src, cli->slice_dir);
-    if (!cli->heights_file && !cli->spacing_given && !cli->heights_from_names)
+    if (!cli->heights_file && !cli->spacing_given && !cli->heights_from_names) {
       note_numbered_names(&src, cli->slice_dir);
+      note_heights_beside(cli->slice_dir);
+    }
     if (cli->stack.per_iteration && cli->stack.dz > 0)
       fprintf(stderr, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
                       "iteration is a slice)\n");

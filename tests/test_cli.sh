@@ -343,6 +343,7 @@ check "numbered 1, 9, 17 exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "numbered 1, 9, 17: a note suggests --heights-from-names" \
   grep -q "note: .*numbered: the file names number the slices 1, 9, ... 17 (steps of 8), .*add --heights-from-names" "$TMP/e"
 check "numbered 1, 9, 17 without placement: 3 slices" [ "$(lines "$TMP/out-numbered/heights.txt")" -eq 3 ]
+check "numbered, no heights.txt beside them: no note about one" sh -c "! grep -q 'is not read' '$TMP/e'"
 "$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-numbered-8" --input outline --no-preview \
   --spacing 8 >"$TMP/o" 2>"$TMP/e"
 check "numbered, --spacing 8: no such note" sh -c "! grep -q 'file names number' '$TMP/e'"
@@ -357,6 +358,14 @@ check "numbered 1, 3, 10: a note suggests --heights-from-names" \
 "$LSM" reconstruct "$TMP/numbered-consecutive" -o "$TMP/out-consecutive" --input outline \
   --no-preview >"$TMP/o" 2>"$TMP/e"
 check "numbered 5, 6, 7: no note about the names" sh -c "! grep -q 'file names number' '$TMP/e'"
+# A heights.txt beside the slices is not read without --heights: a note says so.
+"$LSM" reconstruct "$SET" -o "$TMP/out-beside" --input outline --no-preview >"$TMP/o" 2>"$TMP/e"
+check "heights.txt beside the slices, no --heights: a note says it is not read" \
+  grep -q "^lsmorph: note: .*pyramid/heights.txt is not read: the slices are 1 apart; give it with --heights" "$TMP/e"
+check "heights.txt beside the slices: placed 1 apart (7 slices)" [ "$(lines "$TMP/out-beside/heights.txt")" -eq 7 ]
+"$LSM" reconstruct "$SET" -o "$TMP/out-beside-h" --input outline --no-preview --dz 40 \
+  --heights "$SET/heights.txt" >"$TMP/o" 2>"$TMP/e"
+check "with --heights: no such note" sh -c "! grep -q 'is not read' '$TMP/e'"
 # --heights-from-names: the numbers times --spacing are the heights.
 "$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-names" --input outline --no-preview \
   --heights-from-names >"$TMP/o" 2>"$TMP/e"
