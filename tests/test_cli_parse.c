@@ -27,6 +27,8 @@ static void test_reconstruct_defaults(void **state) {
   assert_int_equal(cli.stack.max_iter, 100000);
   assert_true(cli.stack.morph.cfl == 0.75);
   assert_true(cli.stack.tol == 0.25);
+  assert_int_equal(cli.heights_from_names, 0);
+  assert_int_equal(cli.spacing_given, 0);
 }
 
 static void test_long_forms(void **state) {
@@ -40,6 +42,26 @@ static void test_long_forms(void **state) {
   assert_int_equal(cli.device, 2);
   assert_int_equal(cli.quiet, 1);
   assert_int_equal(cli.stack.max_iter, 7);
+}
+
+/* How the slices are placed: --spacing, --heights, --heights-from-names. */
+static void test_placement(void **state) {
+  (void)state;
+  lsm_cli cli;
+  lsm_err err;
+  char *names[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--heights-from-names",
+                   "--spacing", "2.5"};
+  assert_int_equal(parse(&cli, &err, 8, names), LSM_OK);
+  assert_int_equal(cli.heights_from_names, 1);
+  assert_int_equal(cli.spacing_given, 1);
+  assert_true(cli.spacing == 2.5);
+  char *both[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--heights", "z.txt",
+                  "--heights-from-names"};
+  assert_int_equal(parse(&cli, &err, 8, both), LSM_ERR_USAGE);
+  assert_non_null(strstr(err.msg, "give one"));
+  char *valued[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--heights-from-names=1"};
+  assert_int_equal(parse(&cli, &err, 6, valued), LSM_ERR_USAGE);
+  assert_non_null(strstr(err.msg, "takes no value"));
 }
 
 static void test_help_topics(void **state) {
@@ -70,6 +92,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_reconstruct_defaults),
       cmocka_unit_test(test_long_forms),
+      cmocka_unit_test(test_placement),
       cmocka_unit_test(test_help_topics),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
