@@ -387,24 +387,24 @@ check "--heights-from-names --spacing 2.5: input heights 2.5, 7.5, 25" \
   grep -q '"heights": \[2.5, 7.5, 25\]' "$TMP/out-names-uneven/run.json"
 check "--heights-from-names --spacing 2.5 --dz 2.5: 10 slices, 2.5 to 25" \
   [ "$(tr '\n' ' ' <"$TMP/out-names-uneven/heights.txt")" = "2.5 5 7.5 10 12.5 15 17.5 20 22.5 25 " ]
-mkdir -p "$TMP/names-bad" "$TMP/names-down"
-cp "$SET/001.png" "$TMP/names-bad/s1.png"
-cp "$SET/002.png" "$TMP/names-bad/top.png"
-"$LSM" reconstruct "$TMP/names-bad" -o "$TMP/out-names-bad" --input outline --heights-from-names \
-  >"$TMP/o" 2>"$TMP/e"
-rc=$?
-check "--heights-from-names, a name without a number: exit 1 (got $rc)" [ $rc -eq 1 ]
-check "--heights-from-names, a name without a number: the error names the file" \
-  grep -q "^lsmorph: error: .*names-bad/top.png: --heights-from-names: the file name does not end with a number" "$TMP/e"
-cp "$SET/001.png" "$TMP/names-down/a_12.png"
-cp "$SET/002.png" "$TMP/names-down/b_3.png"
-"$LSM" reconstruct "$TMP/names-down" -o "$TMP/out-names-down" --input outline --heights-from-names \
-  >"$TMP/o" 2>"$TMP/e"
-rc=$?
-check "--heights-from-names, numbers falling in name order: exit 1 (got $rc)" [ $rc -eq 1 ]
-check "--heights-from-names, numbers falling: the error says which" \
-  grep -q "^lsmorph: error: .*names-down/b_3.png: --heights-from-names: its number 3 does not follow a_12.png's 12" "$TMP/e"
-check "failed --heights-from-names runs wrote nothing" [ ! -e "$TMP/out-names-bad" ] && [ ! -e "$TMP/out-names-down" ]
+# names_refused FOLDER FIRST SECOND ERROR WHAT: two slices named FIRST, SECOND are refused
+# with --heights-from-names, the error naming SECOND, and nothing is written.
+names_refused() {
+  mkdir -p "$TMP/$1"
+  cp "$SET/001.png" "$TMP/$1/$2"
+  cp "$SET/002.png" "$TMP/$1/$3"
+  "$LSM" reconstruct "$TMP/$1" -o "$TMP/out-$1" --input outline --heights-from-names \
+    >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "--heights-from-names, $5: exit 1 (got $rc)" [ $rc -eq 1 ]
+  check "--heights-from-names, $5: the error says so" \
+    grep -q "^lsmorph: error: .*$1/$3: --heights-from-names: $4" "$TMP/e"
+  check "--heights-from-names, $5: nothing written" [ ! -e "$TMP/out-$1" ]
+}
+names_refused names-bad s1.png top.png "the file name does not end with a number" \
+  "a name without a number"
+names_refused names-down a_12.png b_3.png "its number 3 does not follow a_12.png's 12" \
+  "numbers falling in name order"
 "$LSM" reconstruct "$TMP/numbered" -o "$TMP/out-names-both" --heights "$SET/heights.txt" \
   --heights-from-names >"$TMP/o" 2>"$TMP/e"
 rc=$?
