@@ -68,6 +68,9 @@ typedef struct json_reader {
   int count;
   int found;
   double value;
+  int want_array;   /* seeking an array of numbers, not one number */
+  double *items;    /* its elements (up to capacity), counted in n_items */
+  size_t capacity, n_items;
 } json_reader;
 
 enum { JSON_MAX_DEPTH = 256 };
@@ -146,10 +149,16 @@ static int json_read_value(json_reader *r, int level, int on_path) {
   const char c = *r->p;
   if (c == '{' || c == '[') { /* an object's members, an array's elements */
     const char close = c == '{' ? '}' : ']';
+    /* the array sought: its elements are collected, and it is found when
+     * every one is a number (a later duplicate wins) */
+    const int target = c == '[' && r->want_array && on_path && level == r->count;
+    int numbers = 1;
+    if (target) r->n_items = 0;
     r->p++;
     json_space(r);
     if (*r->p == close) {
       r->p++;
+      if (target) r->found = 2;
       return 1;
     }
     for (;;) {
@@ -164,13 +173,23 @@ static int json_read_value(json_reader *r, int level, int on_path) {
         r->p++;
         match = on_path && level < r->count && strlen(r->keys[level]) == len &&
                 memcmp(r->keys[level], key, len) == 0;
-        json_space(r);
       }
+      json_space(r);
       const char *value = r->p;
       if (!json_read_value(r, level + 1, match)) return 0;
-      if (match && level + 1 == r->count && (*value == '-' || (*value >= '0' && *value <= '9'))) {
-        r->found = 1; /* the number sought, read by the grammar above */
-        r->value = strtod(value, NULL);
+      const int number = *value == '-' || (*value >= '0' && *value <= '9');
+      if (match && level + 1 == r->count) {
+        if (r->want_array) /* the member's value was read: found if the array sought */
+          r->found = *value == '[' && r->found == 2;
+        else if (number) {
+          r->found = 1; /* the number sought, read by the grammar above */
+          r->value = strtod(value, NULL);
+        }
+      }
+      if (target) {
+        if (number && r->n_items < r->capacity) r->items[r->n_items] = strtod(value, NULL);
+        r->n_items += number;
+        numbers &= number;
       }
       json_space(r);
       if (*r->p == ',') {
@@ -179,6 +198,7 @@ static int json_read_value(json_reader *r, int level, int on_path) {
       }
       if (*r->p != close) return 0;
       r->p++;
+      if (target) r->found = numbers ? 2 : 0; /* 2: an array of numbers, seen by the member */
       return 1;
     }
   }
@@ -195,7 +215,7 @@ static int json_read_value(json_reader *r, int level, int on_path) {
 
 int lsm_json_find_number(const char *text, const char *const *keys, int count, double *value,
                          size_t *error_at) {
-  json_reader r = {text, keys, count, 0, 0.0};
+  json_reader r = {.p = text, .keys = keys, .count = count};
   int ok = json_read_value(&r, 0, 1);
   if (ok) {
     json_space(&r);
@@ -206,5 +226,22 @@ int lsm_json_find_number(const char *text, const char *const *keys, int count, d
     return -1;
   }
   if (r.found && value) *value = r.value;
+  return r.found;
+}
+
+int lsm_json_find_numbers(const char *text, const char *const *keys, int count, double *values,
+                          size_t capacity, size_t *n, size_t *error_at) {
+  json_reader r = {.p = text, .keys = keys, .count = count, .want_array = 1,
+                   .items = values, .capacity = values ? capacity : 0};
+  int ok = json_read_value(&r, 0, 1);
+  if (ok) {
+    json_space(&r);
+    ok = *r.p == '\0';
+  }
+  if (!ok) {
+    if (error_at) *error_at = (size_t)(r.p - text);
+    return -1;
+  }
+  *n = r.found ? r.n_items : 0;
   return r.found;
 }

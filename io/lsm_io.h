@@ -274,6 +274,14 @@ void lsm_shortest_number(char *text, size_t size, double v);
 int lsm_json_find_number(const char *text, const char *const *keys, int count, double *value,
                          size_t *error_at);
 
+/* The same for an array of numbers: returns 1 when the member is there and
+ * an array whose elements are all numbers, with *n its length and its first
+ * min(n, capacity) elements in values (values may be NULL with capacity 0, to
+ * learn n); 0 when the document is valid but has no such array (*n = 0); -1
+ * when it is not valid JSON. */
+int lsm_json_find_numbers(const char *text, const char *const *keys, int count, double *values,
+                          size_t capacity, size_t *n, size_t *error_at);
+
 /* Writes the JSON sidecar of a raw volume (sizes, spacing, origin, dtype,
  * endianness, data file name). */
 lsm_status lsm_raw_write_json(const char *path, const char *data_file,

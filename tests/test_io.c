@@ -1453,11 +1453,58 @@ static void test_json_find_number(void **state) {
   }
 }
 
+/* lsm_json_find_numbers: an array of numbers by its member path, in any
+ * formatting; its length without a buffer; only arrays of numbers count. */
+static void test_json_find_numbers(void **state) {
+  (void)state;
+  static const char *const path[] = {"input", "heights"};
+  double v[4] = {0.0, 0.0, 0.0, 0.0};
+  size_t n = 99, at = 0;
+  const char *run = "{\"input\": {\"files\": [\"1.png\", \"9.png\"], \"heights\":\n"
+                    "  [ 1 ,9,\t-2.5e1 ]}, \"options\": {\"heights\": [7]}}";
+  assert_int_equal(lsm_json_find_numbers(run, path, 2, NULL, 0, &n, &at), 1);
+  assert_int_equal(n, 3);
+  assert_int_equal(lsm_json_find_numbers(run, path, 2, v, 4, &n, &at), 1);
+  assert_int_equal(n, 3);
+  assert_true(v[0] == 1.0 && v[1] == 9.0 && v[2] == -25.0 && v[3] == 0.0);
+  /* a buffer shorter than the array: its first elements, and the length */
+  v[0] = v[1] = 0.0;
+  assert_int_equal(lsm_json_find_numbers(run, path, 2, v, 1, &n, &at), 1);
+  assert_int_equal(n, 3);
+  assert_true(v[0] == 1.0 && v[1] == 0.0);
+  /* empty; a later duplicate wins, also when it is not an array of numbers */
+  assert_int_equal(lsm_json_find_numbers("{\"input\":{\"heights\":[ ]}}", path, 2, v, 4, &n, &at), 1);
+  assert_int_equal(n, 0);
+  assert_int_equal(lsm_json_find_numbers("{\"input\":{\"heights\":[1],\"heights\":[2,3]}}", path, 2,
+                                         v, 4, &n, &at), 1);
+  assert_true(n == 2 && v[0] == 2.0 && v[1] == 3.0);
+  assert_int_equal(lsm_json_find_numbers("{\"input\":{\"heights\":[1],\"heights\":4}}", path, 2, v,
+                                         4, &n, &at), 0);
+  assert_int_equal(n, 0);
+  /* not an array of numbers, or not there */
+  static const char *const none[] = {
+      "{\"input\":{\"heights\":[1,\"2\"]}}", "{\"input\":{\"heights\":[1,[2]]}}",
+      "{\"input\":{\"heights\":[null]}}",   "{\"input\":{\"heights\":{\"a\":1}}}",
+      "{\"input\":{\"height\":[1]}}",      "{\"heights\":[1]}",
+      "[{\"input\":{\"heights\":[1]}}]",
+  };
+  for (size_t k = 0; k < sizeof none / sizeof none[0]; ++k) {
+    n = 99;
+    assert_int_equal(lsm_json_find_numbers(none[k], path, 2, v, 4, &n, &at), 0);
+    assert_int_equal(n, 0);
+  }
+  /* invalid JSON, wherever it breaks */
+  at = 0;
+  assert_int_equal(lsm_json_find_numbers("{\"input\":{\"heights\":[1,]}}", path, 2, v, 4, &n, &at), -1);
+  assert_int_equal(at, 23);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_natural_cmp),
       cmocka_unit_test(test_name_number),
       cmocka_unit_test(test_json_find_number),
+      cmocka_unit_test(test_json_find_numbers),
       cmocka_unit_test(test_heights_good),
       cmocka_unit_test(test_heights_bad),
       cmocka_unit_test_setup_teardown(test_heights_read, setup_tmp, teardown_tmp),
