@@ -14,7 +14,7 @@ static const char general_help[] =
     "\n"
     "Usage:\n"
     "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
-    "  lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
+    "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N]\n"
     "  lsmorph devices\n"
     "  lsmorph --help [COMMAND] | --version | help reconstruct|score|devices\n"
     "\n"
@@ -209,15 +209,28 @@ static const char reconstruct_help_files[] =
     "only when it is empty or an earlier result (it has a run.json).\n";
 
 static const char score_help[] =
-    "Usage: lsmorph score TRUTH_DIR OUT_DIR --stride K\n"
+    "Usage: lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N]\n"
     "\n"
-    "Scores a reconstruction made from every K-th slice of TRUTH_DIR (the 1st,\n"
-    "(K+1)-th, ... in natural order; K >= 2), reconstructed with --spacing K and\n"
-    "the default --dz and --pixel-size, against the slices left out: the N-th\n"
-    "file of OUT_DIR/slices (00001.png, 00002.png, ...) is compared with the N-th\n"
-    "truth slice for every N that was not an input, up to the last kept slice\n"
-    "(nothing is extrapolated past it; a note names the truth slices beyond it,\n"
-    "which are not scored).  Prints one JSON\n"
+    "Scores a reconstruction made from some of the slices of TRUTH_DIR (a full\n"
+    "stack, in natural order) against the slices left out between them.  Which\n"
+    "slices were the inputs:\n"
+    "  --stride K   every K-th (K >= 2), from the first truth slice or from --first:\n"
+    "               reconstructed with --spacing K and the default --dz and\n"
+    "               --pixel-size (or with --heights-from-names on slices kept under\n"
+    "               their own numbers)\n"
+    "  (none)       where OUT_DIR/run.json's input heights put them: the first\n"
+    "               input is truth slice 1 (or --first), and each input lies as\n"
+    "               many truth slices above it as its height lies output steps\n"
+    "               (--dz) above the first's.  For any kept slices, evenly or not,\n"
+    "               reconstructed with --dz equal to the truth's slice spacing\n"
+    "               (--heights-from-names on slices kept under their numbers in\n"
+    "               the truth: 1 apart by default)\n"
+    "  --first N    the first input is truth slice N (default 1); the slices\n"
+    "               before it are not scored\n"
+    "The n-th file of OUT_DIR/slices (00001.png, 00002.png, ...) is compared with\n"
+    "the truth slice n - 1 after the first input, for every one that was not an\n"
+    "input, up to the last input (nothing is extrapolated past it; a note names\n"
+    "the truth slices beyond it, which are not scored).  Prints one JSON\n"
     "object (distances in pixels, symmetric, between boundary pixels):\n"
     "  held_out         slices scored\n"
     "  dice_volume      Dice pooled over all held-out slices\n"
@@ -233,12 +246,13 @@ static const char score_help[] =
     "  one_sided_empty  held-out slices empty on one side only\n"
     "A score that is undefined is null: the distances where no slice has a boundary,\n"
     "the volume error where the truth is empty.\n"
-    "A result that does not fit TRUTH_DIR and K is refused: its slice count must be\n"
-    "the one --spacing K gives, its run.json must count the kept slices\n"
-    "(input.slices), and every kept slice must come back exactly.  (Slices written\n"
-    "by another tool, with no run.json, are scored without the check of run.json's\n"
-    "kept-slice count.)  Truth stored as 0/1 label masks is read as reconstruct\n"
-    "reads them, the rule decided over the kept slices.\n";
+    "A result that does not fit TRUTH_DIR and its inputs is refused: its slices\n"
+    "must run from the first input to the last, one truth slice apart, with\n"
+    "--stride its run.json must count the kept slices (input.slices), and every\n"
+    "input must come back exactly.  (Slices written by another tool, with no\n"
+    "run.json, need --stride and are scored without the count's check.)  Truth\n"
+    "stored as 0/1 label masks is read as reconstruct reads them, the rule decided\n"
+    "over the kept slices.\n";
 
 static const char devices_help[] =
     "Usage: lsmorph devices\n"
@@ -578,6 +592,10 @@ static lsm_status parse_score(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       long n;
       LSM_TRY(parse_int("--stride", v, 2, 1000000, &n, err));
       cli->stride = (int)n;
+    } else if (option && strncmp(arg, "--first", 7) == 0 && (arg[7] == '\0' || arg[7] == '=')) {
+      const char *v = NULL;
+      LSM_TRY(take_value(c, "--first", arg[7] == '=' ? arg + 8 : NULL, &v, err));
+      LSM_TRY(parse_int("--first", v, 1, 1000000000, &cli->first, err));
     } else if (option) {
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s' (see 'lsmorph help score')", arg);
     } else if (!cli->truth_dir) {
@@ -593,7 +611,6 @@ static lsm_status parse_score(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   if (!*cli->truth_dir || !*cli->result_dir)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "score: %s is empty",
                     *cli->truth_dir ? "OUT_DIR" : "TRUTH_DIR");
-  if (!cli->stride) return lsm_fail(err, LSM_ERR_USAGE, NULL, "score: needs --stride K");
   return LSM_OK;
 }
 

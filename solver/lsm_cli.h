@@ -50,7 +50,8 @@ typedef struct lsm_cli {
   /* score */
   const char *truth_dir;
   const char *result_dir;
-  int stride;                /* score: input slices were every stride-th */
+  int stride;                /* score: input slices were every stride-th (0: from run.json) */
+  long first;                /* score: the first input is this truth slice (from 1; 0: not given) */
 } lsm_cli;
 
 /* Parses argv (argv[0] is the program).  Returns LSM_OK, or LSM_ERR_USAGE

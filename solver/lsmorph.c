@@ -1170,35 +1170,126 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
 
 /* ---- score ------------------------------------------------------------------------------ */
 
-/* The number of input slices a result was made from, from its run.json
- * (input.slices); 0 when it has none (slices written by another tool, such
- * as a reference).  A run.json that does not say is an error: the result is
+/* A result's run.json, read whole into *text (NUL-terminated), its path in
+ * path; *text is NULL when there is none (slices written by another tool,
+ * such as a reference).  One that is not JSON is an error: the result is
  * damaged.  Read as JSON, so a run.json saved again by another tool (other
  * spacing, other member order) reads alike. */
-static lsm_status result_input_count(const char *result_dir, size_t *count, lsm_err *err) {
-  char path[4200];
-  snprintf(path, sizeof path, "%s/run.json", result_dir);
-  *count = 0;
+static lsm_status read_run_json(const char *result_dir, char path[4200], char **text,
+                                lsm_err *err) {
+  snprintf(path, 4200, "%s/run.json", result_dir);
+  *text = NULL;
   struct stat info;
   if (stat(path, &info) != 0 && errno == ENOENT) return LSM_OK;
-  char *text = NULL;
   size_t len = 0;
-  LSM_TRY(lsm_read_file(path, (size_t)1 << 30, &text, &len, err)); /* far above any run.json */
+  LSM_TRY(lsm_read_file(path, (size_t)1 << 30, text, &len, err)); /* far above any run.json */
+  size_t at = strlen(*text); /* a NUL byte is not JSON */
+  if (at == len && lsm_json_find_number(*text, NULL, 0, NULL, &at) >= 0) return LSM_OK;
+  free(*text);
+  *text = NULL;
+  return lsm_fail(err, LSM_ERR_INPUT, path, "not valid JSON (at byte %zu): the result is damaged",
+                  at);
+}
+
+/* The number of input slices a result was made from (input.slices of its
+ * run.json, valid JSON); a run.json that does not say is an error. */
+static lsm_status result_input_count(const char *text, const char *path, size_t *count,
+                                     lsm_err *err) {
   static const char *const keys[] = {"input", "slices"};
   double n = 0.0;
-  size_t at = 0;
-  const size_t text_len = strlen(text); /* a NUL byte is not JSON */
-  const int found = text_len != len ? -1 : lsm_json_find_number(text, keys, 2, &n, &at);
-  if (text_len != len) at = text_len;
-  free(text);
-  if (found < 0)
-    return lsm_fail(err, LSM_ERR_INPUT, path, "not valid JSON (at byte %zu): the result is damaged",
-                    at);
-  if (found == 0 || !(n >= 1.0 && n <= 1e15 && n == floor(n)))
+  if (lsm_json_find_number(text, keys, 2, &n, NULL) != 1 ||
+      !(n >= 1.0 && n <= 1e15 && n == floor(n)))
     return lsm_fail(err, LSM_ERR_INPUT, path,
                     "does not say how many input slices the result was made from (input.slices)");
   *count = (size_t)n;
   return LSM_OK;
+}
+
+/* Where a result's input slices lie among the truth slices (0-based), from
+ * its run.json: the input heights (input.heights) are whole output steps
+ * (options.dz) apart, the first input being truth slice first.  *pos is
+ * allocated, *n_pos entries. */
+static lsm_status result_input_positions(const char *text, const char *path, size_t first,
+                                         size_t **pos, size_t *n_pos, lsm_err *err) {
+  static const char *const heights_key[] = {"input", "heights"}, *const dz_key[] = {"options", "dz"};
+  size_t n = 0;
+  double dz = 0.0;
+  *pos = NULL;
+  *n_pos = 0;
+  if (lsm_json_find_numbers(text, heights_key, 2, NULL, 0, &n, NULL) != 1 || n == 0)
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "does not give the input heights (input.heights): give --stride K");
+  if (lsm_json_find_number(text, dz_key, 2, &dz, NULL) != 1 || !(dz > 0.0) || !isfinite(dz))
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "does not give the output step (options.dz): give --stride K");
+  double *heights = lsm_alloc(n, sizeof *heights, err, "input heights");
+  size_t *at = lsm_alloc(n, sizeof *at, err, "input positions");
+  lsm_status st = heights && at ? LSM_OK : (err ? err->status : LSM_ERR_NOMEM);
+  if (st == LSM_OK) lsm_json_find_numbers(text, heights_key, 2, heights, n, &n, NULL);
+  for (size_t k = 0; st == LSM_OK && k < n; ++k) {
+    const double steps = (heights[k] - heights[0]) / dz, whole = nearbyint(steps);
+    if (!(fabs(steps - whole) <= 1e-6 * (1.0 + fabs(steps))) || whole > 1e9 ||
+        (k > 0 && !(whole > (double)(at[k - 1] - first))))
+      st = lsm_fail(err, LSM_ERR_INPUT, path,
+                    "input slice %zu lies %.17g output steps (options.dz %.17g) above the first: "
+                    "its inputs are not whole steps apart, so they are not slices of one truth "
+                    "stack (score needs --dz equal to the truth's slice spacing)",
+                    k + 1, steps, dz);
+    else
+      at[k] = first + (size_t)whole;
+  }
+  free(heights);
+  if (st != LSM_OK) {
+    free(at);
+    return st;
+  }
+  *pos = at;
+  *n_pos = n;
+  return LSM_OK;
+}
+
+/* The truth slices that are a result's inputs (0-based, increasing): every
+ * --stride-th from --first (*inputs: run.json's input count, 0 without one),
+ * or, with no --stride, where run.json's input heights put them. */
+static lsm_status score_kept(const lsm_cli *cli, const char *from, size_t n_truth, size_t **kept,
+                             size_t *n_kept, size_t *inputs, lsm_err *err) {
+  const size_t first = cli->first > 0 ? (size_t)cli->first - 1 : 0, k = (size_t)cli->stride;
+  if (k && n_truth <= first + k) /* nothing held out between two inputs */
+    return lsm_fail(err, LSM_ERR_INPUT, cli->truth_dir,
+                    "%zu PNG files: --stride %zu%s needs at least %zu to hold any out", n_truth, k,
+                    from, first + k + 1);
+  char path[4200], *text = NULL;
+  LSM_TRY(read_run_json(cli->result_dir, path, &text, err));
+  lsm_status st = LSM_OK;
+  if (k) {
+    *n_kept = (n_truth - 1 - first) / k + 1;
+    *kept = lsm_alloc(*n_kept, sizeof **kept, err, "slice list");
+    if (!*kept) st = err ? err->status : LSM_ERR_NOMEM;
+    for (size_t i = 0; st == LSM_OK && i < *n_kept; ++i) (*kept)[i] = first + i * k;
+    if (st == LSM_OK && text) st = result_input_count(text, path, inputs, err);
+  } else if (!text) {
+    st = lsm_fail(err, LSM_ERR_USAGE, cli->result_dir,
+                  "has no run.json to say which slices were its inputs: give --stride K");
+  } else {
+    st = result_input_positions(text, path, first, kept, n_kept, err);
+    if (st == LSM_OK && (*kept)[*n_kept - 1] >= n_truth)
+      st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
+                    "its last input lies at truth slice %zu (run.json's heights and dz, the first "
+                    "at slice %zu), but %s has %zu slices (score needs --dz equal to the truth's "
+                    "slice spacing)",
+                    (*kept)[*n_kept - 1] + 1, first + 1, cli->truth_dir, n_truth);
+    if (st == LSM_OK && (*kept)[*n_kept - 1] - first + 1 == *n_kept)
+      st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
+                    "its inputs are truth slices %zu to %zu, every one: none is held out to score",
+                    first + 1, (*kept)[*n_kept - 1] + 1);
+  }
+  free(text);
+  if (st != LSM_OK) {
+    free(*kept);
+    *kept = NULL;
+    *n_kept = 0;
+  }
+  return st;
 }
 
 /* Whatever went to standard output (help, version, the device list, the scores) reached it. */
@@ -1210,34 +1301,30 @@ static lsm_status check_stdout(lsm_err *err) {
 
 static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   char **truth = NULL;
-  size_t n = 0;
+  size_t n = 0, *kept = NULL, n_kept = 0;
   LSM_TRY(lsm_dir_list_png(cli->truth_dir, &truth, &n, NULL, err));
-  if (n <= (size_t)cli->stride) { /* nothing held out between two inputs */
-    lsm_path_list_free(truth, n);
-    return lsm_fail(err, LSM_ERR_INPUT, cli->truth_dir,
-                    "%zu PNG files: --stride %d needs at least %d to hold any out", n, cli->stride,
-                    cli->stride + 1);
-  }
+  size_t inputs = 0; /* run.json's input count, with --stride */
+  char from[64] = ""; /* where --stride starts, when not at the first slice */
+  if (cli->first > 1) snprintf(from, sizeof from, " from slice %ld", cli->first);
+  lsm_status st = score_kept(cli, from, n, &kept, &n_kept, &inputs, err);
   lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
   double *pool = NULL;
-  const size_t last_input = (n - 1) / (size_t)cli->stride * (size_t)cli->stride;
+  const size_t first = n_kept ? kept[0] : 0, last = n_kept ? kept[n_kept - 1] : 0;
   /* truth stored as 0/1 labels is read as such (the result slices are
    * 0/255), decided as reconstruct decided it: over the kept slices alone
    * (one bright pixel in a held-out slice must not change how they read) */
-  lsm_status st = LSM_OK;
-  char **kept = lsm_alloc(last_input / (size_t)cli->stride + 1, sizeof *kept, err, "slice list");
-  if (!kept) st = err ? err->status : LSM_ERR_NOMEM;
+  char **kept_paths = st == LSM_OK ? lsm_alloc(n_kept, sizeof *kept_paths, err, "slice list") : NULL;
+  if (st == LSM_OK && !kept_paths) st = err ? err->status : LSM_ERR_NOMEM;
   if (st == LSM_OK) {
-    size_t n_kept = 0;
-    for (size_t k = 0; k <= last_input; k += (size_t)cli->stride) kept[n_kept++] = truth[k];
-    st = pick_foreground(kept, n_kept, &ro_truth, 1, cli->truth_dir, err);
+    for (size_t i = 0; i < n_kept; ++i) kept_paths[i] = truth[kept[i]];
+    st = pick_foreground(kept_paths, n_kept, &ro_truth, 1, cli->truth_dir, err);
   }
-  free(kept);
+  free(kept_paths);
   if (st == LSM_OK) {
     /* a result of another stride or stack would be scored against the wrong
-     * slices: its slice count must be the one this truth and stride give */
+     * slices: its slice count must be the one the kept slices give */
     char dir[4200], **result = NULL;
     size_t m = 0;
     snprintf(dir, sizeof dir, "%s/slices", cli->result_dir);
@@ -1248,36 +1335,50 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
                     "--no-slices has none)");
     if (st == LSM_OK) st = lsm_dir_list_png(dir, &result, &m, NULL, err);
     lsm_path_list_free(result, m);
-    if (st == LSM_OK && m != last_input + 1)
+    if (st == LSM_OK && m != last - first + 1 && cli->stride)
       st = lsm_fail(err, LSM_ERR_INPUT, dir,
-                    "%zu slices, but slices 1, %d, %d, ... of the %zu truth slices, "
+                    "%zu slices, but slices %zu, %zu, %zu, ... of the %zu truth slices, "
                     "reconstructed with --spacing %d and the default --dz, give %zu",
-                    m, cli->stride + 1, 2 * cli->stride + 1, n, cli->stride, last_input + 1);
-    size_t inputs = 0;
-    if (st == LSM_OK) st = result_input_count(cli->result_dir, &inputs, err);
-    if (inputs && inputs != last_input / (size_t)cli->stride + 1)
+                    m, first + 1, first + 1 + (size_t)cli->stride,
+                    first + 1 + 2 * (size_t)cli->stride, n, cli->stride, last - first + 1);
+    else if (st == LSM_OK && m != last - first + 1)
+      st = lsm_fail(err, LSM_ERR_INPUT, dir,
+                    "%zu slices, but its inputs (run.json) are truth slices %zu to %zu, one "
+                    "output step (--dz) apart: %zu",
+                    m, first + 1, last + 1, last - first + 1);
+    if (st == LSM_OK && inputs && inputs != n_kept)
       st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
-                    "was made from %zu slices (run.json), but --stride %d keeps %zu of the %zu "
+                    "was made from %zu slices (run.json), but --stride %d%s keeps %zu of the %zu "
                     "truth slices",
-                    inputs, cli->stride, last_input / (size_t)cli->stride + 1, n);
+                    inputs, cli->stride, from, n_kept, n);
   }
-  for (size_t k = 0; st == LSM_OK && k <= last_input && k < n; ++k) {
+  for (size_t k = first, next = 0; st == LSM_OK && k <= last; ++k) {
     char path[4200];
-    snprintf(path, sizeof path, "%s/slices/%05zu.png", cli->result_dir, k + 1);
+    snprintf(path, sizeof path, "%s/slices/%05zu.png", cli->result_dir, k - first + 1);
     lsm_mask a = {0}, b = {0};
     st = lsm_png_read_mask(path, &ro, &a, err);
     if (st == LSM_OK) st = lsm_png_read_mask(truth[k], &ro_truth, &b, err);
     if (st == LSM_OK && (a.width != b.width || a.height != b.height))
       st = lsm_fail(err, LSM_ERR_INPUT, path, "slice is %dx%d but the truth slice %s is %dx%d",
                     a.width, a.height, truth[k], b.width, b.height);
-    if (k % (size_t)cli->stride == 0) {
+    if (next < n_kept && kept[next] == k) {
       /* an input slice comes back exactly: otherwise the result was not made
-       * from every stride-th slice of this truth */
-      if (st == LSM_OK && memcmp(a.pixels, b.pixels, (size_t)a.width * (size_t)a.height) != 0)
-        st = lsm_fail(err, LSM_ERR_INPUT, path,
-                      "differs from the truth slice %s, which --stride %d makes an input: was "
-                      "the result made from slices 1, %d, %d, ... of %s?",
-                      truth[k], cli->stride, cli->stride + 1, 2 * cli->stride + 1, cli->truth_dir);
+       * from these slices of this truth */
+      ++next;
+      if (st == LSM_OK && memcmp(a.pixels, b.pixels, (size_t)a.width * (size_t)a.height) != 0) {
+        if (cli->stride)
+          st = lsm_fail(err, LSM_ERR_INPUT, path,
+                        "differs from the truth slice %s, which --stride %d makes an input: was "
+                        "the result made from slices %zu, %zu, %zu, ... of %s?",
+                        truth[k], cli->stride, first + 1, first + 1 + (size_t)cli->stride,
+                        first + 1 + 2 * (size_t)cli->stride, cli->truth_dir);
+        else
+          st = lsm_fail(err, LSM_ERR_INPUT, path,
+                        "differs from the truth slice %s, which run.json's input heights make "
+                        "an input, the first input taken as truth slice %zu (--first N if it "
+                        "is slice N): was the result made from slices of %s?",
+                        truth[k], first + 1, cli->truth_dir);
+      }
       lsm_mask_free(&a);
       lsm_mask_free(&b);
       continue;
@@ -1302,14 +1403,28 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     lsm_mask_free(&b);
   }
   lsm_path_list_free(truth, n);
+  free(kept);
   double pooled = lsm_quantile(pool, pool_n, 0.95);
   free(pool);
   if (st != LSM_OK) return st;
-  if (last_input + 1 < n)
+  if (first == 1)
+    fprintf(stderr, "lsmorph: note: truth slice 1 lies before the first kept slice (2) and is "
+                    "not scored\n");
+  else if (first > 1)
+    fprintf(stderr,
+            "lsmorph: note: truth slices 1 to %zu lie before the first kept slice (%zu) and are "
+            "not scored\n",
+            first, first + 1);
+  if (last + 2 == n)
+    fprintf(stderr,
+            "lsmorph: note: truth slice %zu lies past the last kept slice (%zu) and is not "
+            "scored (nothing is extrapolated past it)\n",
+            n, last + 1);
+  else if (last + 2 < n)
     fprintf(stderr,
             "lsmorph: note: truth slices %zu to %zu lie past the last kept slice (%zu) and are "
             "not scored (nothing is extrapolated past it)\n",
-            last_input + 2, n, last_input + 1);
+            last + 2, n, last + 1);
   /* undefined scores (no held-out slice, no boundary on both sides, an empty
    * truth) are JSON null, as in run.json */
   printf("{\"held_out\": %zu, \"dice_volume\": ", count);

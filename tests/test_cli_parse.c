@@ -64,6 +64,25 @@ static void test_placement(void **state) {
   assert_non_null(strstr(err.msg, "takes no value"));
 }
 
+/* score: --stride and --first are optional (run.json places the inputs). */
+static void test_score_options(void **state) {
+  (void)state;
+  lsm_cli cli;
+  lsm_err err;
+  char *bare[] = {"lsmorph", "score", "truth", "out"};
+  assert_int_equal(parse(&cli, &err, 4, bare), LSM_OK);
+  assert_int_equal(cli.command, LSM_CMD_SCORE);
+  assert_int_equal(cli.stride, 0);
+  assert_int_equal(cli.first, 0);
+  char *both[] = {"lsmorph", "score", "--first=5", "truth", "out", "--stride", "8"};
+  assert_int_equal(parse(&cli, &err, 7, both), LSM_OK);
+  assert_int_equal(cli.first, 5);
+  assert_int_equal(cli.stride, 8);
+  char *bad[] = {"lsmorph", "score", "truth", "out", "--first", "x"};
+  assert_int_equal(parse(&cli, &err, 6, bad), LSM_ERR_USAGE);
+  assert_non_null(strstr(err.msg, "--first"));
+}
+
 static void test_help_topics(void **state) {
   (void)state;
   const char *topics[] = {"reconstruct", "score", "devices"};
@@ -93,6 +112,7 @@ int main(void) {
       cmocka_unit_test(test_reconstruct_defaults),
       cmocka_unit_test(test_long_forms),
       cmocka_unit_test(test_placement),
+      cmocka_unit_test(test_score_options),
       cmocka_unit_test(test_help_topics),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -310,6 +310,67 @@ if [ $rc -eq 0 ] && grep -q '"held_out": 4,' "$TMP/stdout" &&
 else
   bad "score past the last kept slice: exit $rc: $(cat "$TMP/stdout" "$TMP/stderr")"
 fi
+# without --stride, run.json's input heights say which slices were the inputs,
+# evenly or not, from slice 1 or from --first
+"$LSM" score tall r4 >"$TMP/stdout" 2>"$TMP/stderr" && "$LSM" score tall r4 --stride 4 >"$TMP/stdout4" 2>>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && grep -q '"held_out": 6,' "$TMP/stdout" && cmp -s "$TMP/stdout" "$TMP/stdout4"; then
+  ok
+else
+  bad "score of a stride-4 result from its run.json: exit $rc: $(cat "$TMP/stdout" "$TMP/stdout4" "$TMP/stderr")"
+fi
+mkdir -p tall-odd tall-even && cp tall/1.png tall/2.png tall/6.png tall/9.png tall-odd/ &&
+  cp tall/2.png tall/4.png tall/6.png tall/8.png tall-even/
+"$LSM" reconstruct tall-odd -o r-odd --heights-from-names -q --no-preview >/dev/null 2>"$TMP/stderr" &&
+  "$LSM" score tall r-odd >"$TMP/stdout" 2>>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && grep -q '"held_out": 5,' "$TMP/stdout" && ! grep -q "note" "$TMP/stderr"; then
+  ok
+else
+  bad "score of uneven kept slices 1, 2, 6, 9: exit $rc: $(cat "$TMP/stdout" "$TMP/stderr")"
+fi
+"$LSM" reconstruct tall-even -o r-even --heights-from-names -q --no-preview >/dev/null 2>"$TMP/stderr" &&
+  "$LSM" score tall r-even --first 2 >"$TMP/stdout" 2>>"$TMP/stderr" &&
+  "$LSM" score tall r-even --first 2 --stride 2 >"$TMP/stdout2" 2>>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && grep -q '"held_out": 3,' "$TMP/stdout" && cmp -s "$TMP/stdout" "$TMP/stdout2" &&
+  [ "$(grep -c -F "lsmorph: note: truth slice 1 lies before the first kept slice (2) and is not scored" "$TMP/stderr")" -eq 2 ] &&
+  [ "$(grep -c -F "lsmorph: note: truth slice 9 lies past the last kept slice (8) and is not scored" "$TMP/stderr")" -eq 2 ]; then
+  ok
+else
+  bad "score of slices 2, 4, 6, 8 with --first 2: exit $rc: $(cat "$TMP/stdout" "$TMP/stdout2" "$TMP/stderr")"
+fi
+expect "score: an offset result taken from slice 1" 1 \
+  "r-even/slices/00001.png: differs from the truth slice tall/1.png, which run.json's input heights make an input, the first input taken as truth slice 1 (--first N if it is slice N)" - \
+  score tall r-even
+expect "score: an offset result with --stride from slice 1" 1 \
+  "r-even/slices: 7 slices, but slices 1, 3, 5, ... of the 9 truth slices, reconstructed with --spacing 2 and the default --dz, give 9" - \
+  score tall r-even --stride 2
+expect "score: an offset result from the wrong --first" 1 \
+  "r-even/slices/00001.png: differs from the truth slice tall/3.png, which run.json's input heights make an input, the first input taken as truth slice 3" - \
+  score tall r-even --first 3
+expect "score: --stride from a late --first" 1 "tall: 9 PNG files: --stride 2 from slice 8 needs at least 10" - \
+  score tall r-even --stride 2 --first 8
+expect "score: bad --first" 2 "--first: 0 is out of range" - score tall r4 --first 0
+expect "score: no --stride and no run.json" 2 \
+  "r4-bare: has no run.json to say which slices were its inputs: give --stride K" - score tall r4-bare
+expect "score: no --stride and a run.json without heights" 1 \
+  "r4-uncounted/run.json: does not give the input heights (input.heights): give --stride K" - score tall r4-uncounted
+cp -r r4 r4-half && /usr/bin/python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["input"]["heights"][1] += 0.5
+json.dump(d, open(sys.argv[1], "w"))' r4-half/run.json
+expect "score: input heights not whole output steps apart" 1 \
+  "r4-half/run.json: input slice 2 lies 4.5 output steps (options.dz 1) above the first: its inputs are not whole steps apart" - \
+  score tall r4-half
+"$LSM" reconstruct tall4 -o r4-fine --spacing 4 --dz 0.5 -q --no-preview >/dev/null 2>"$TMP/stderr" || bad "reconstruct --dz 0.5: $(cat "$TMP/stderr")"
+expect "score: an output step finer than the truth's" 1 \
+  "r4-fine: its last input lies at truth slice 17 (run.json's heights and dz, the first at slice 1), but tall has 9 slices (score needs --dz equal to the truth's slice spacing)" - \
+  score tall r4-fine
+"$LSM" reconstruct tall -o r-all -q --no-preview >/dev/null 2>"$TMP/stderr" || bad "reconstruct tall: $(cat "$TMP/stderr")"
+expect "score: every truth slice an input" 1 "r-all: its inputs are truth slices 1 to 9, every one: none is held out to score" - \
+  score tall r-all
 
 # ---- output path ------------------------------------------------------------------------------------------
 expect "OUT under a regular file" 1 "afile/out: cannot create a folder next to it: Not a directory" \
