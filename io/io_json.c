@@ -213,18 +213,22 @@ static int json_read_value(json_reader *r, int level, int on_path) {
   return json_read_number(r);
 }
 
+/* Reads the whole document with r (the search set up); 1 when it is valid
+ * JSON, else 0 with *error_at where it stops being so. */
+static int json_read_document(json_reader *r, const char *text, size_t *error_at) {
+  int ok = json_read_value(r, 0, 1);
+  if (ok) {
+    json_space(r);
+    ok = *r->p == '\0';
+  }
+  if (!ok && error_at) *error_at = (size_t)(r->p - text);
+  return ok;
+}
+
 int lsm_json_find_number(const char *text, const char *const *keys, int count, double *value,
                          size_t *error_at) {
   json_reader r = {.p = text, .keys = keys, .count = count};
-  int ok = json_read_value(&r, 0, 1);
-  if (ok) {
-    json_space(&r);
-    ok = *r.p == '\0';
-  }
-  if (!ok) {
-    if (error_at) *error_at = (size_t)(r.p - text);
-    return -1;
-  }
+  if (!json_read_document(&r, text, error_at)) return -1;
   if (r.found && value) *value = r.value;
   return r.found;
 }
@@ -233,15 +237,8 @@ int lsm_json_find_numbers(const char *text, const char *const *keys, int count, 
                           size_t capacity, size_t *n, size_t *error_at) {
   json_reader r = {.p = text, .keys = keys, .count = count, .want_array = 1,
                    .items = values, .capacity = values ? capacity : 0};
-  int ok = json_read_value(&r, 0, 1);
-  if (ok) {
-    json_space(&r);
-    ok = *r.p == '\0';
-  }
-  if (!ok) {
-    if (error_at) *error_at = (size_t)(r.p - text);
-    return -1;
-  }
-  *n = r.found ? r.n_items : 0;
+  *n = 0;
+  if (!json_read_document(&r, text, error_at)) return -1;
+  if (r.found) *n = r.n_items;
   return r.found;
 }
