@@ -82,14 +82,24 @@ lsm_status lsm_format_list_parse(const char *list, unsigned *formats, lsm_err *e
   return LSM_OK;
 }
 
+/* The files each format writes, in the order run.json lists them; a stream
+ * format's sample file comes first (volume.raw before volume.json). */
+static const struct {
+  unsigned bit;
+  const char *file;
+} files[] = {{LSM_FORMAT_NRRD, "volume.nrrd"}, {LSM_FORMAT_MHA, "volume.mha"},
+             {LSM_FORMAT_VTK, "volume.vtk"},   {LSM_FORMAT_NII, "volume.nii"},
+             {LSM_FORMAT_NII_GZ, "volume.nii.gz"}, {LSM_FORMAT_RAW, "volume.raw"},
+             {LSM_FORMAT_RAW, "volume.json"},  {LSM_FORMAT_EXR, "exr/"}};
+
+/* The sample file of a stream format (one of nrrd, mha, vtk, nii, nii.gz, raw). */
+static const char *stream_file_name(unsigned format) {
+  for (size_t k = 0; k < sizeof files / sizeof files[0]; ++k)
+    if (files[k].bit == format) return files[k].file;
+  return NULL;
+}
+
 size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap) {
-  static const struct {
-    unsigned bit;
-    const char *file;
-  } files[] = {{LSM_FORMAT_NRRD, "volume.nrrd"}, {LSM_FORMAT_MHA, "volume.mha"},
-               {LSM_FORMAT_VTK, "volume.vtk"},   {LSM_FORMAT_NII, "volume.nii"},
-               {LSM_FORMAT_NII_GZ, "volume.nii.gz"}, {LSM_FORMAT_RAW, "volume.raw"},
-               {LSM_FORMAT_RAW, "volume.json"},  {LSM_FORMAT_EXR, "exr/"}};
   size_t n = 0;
   for (size_t k = 0; k < sizeof files / sizeof files[0]; ++k) {
     if (!(formats & files[k].bit)) continue;
@@ -170,12 +180,7 @@ static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *er
   memset(s, 0, sizeof *s);
   s->format = format;
   const int mask = w->info.values == LSM_VALUES_MASK;
-  const char *name = format == LSM_FORMAT_NRRD  ? "volume.nrrd"
-                     : format == LSM_FORMAT_MHA ? "volume.mha"
-                     : format == LSM_FORMAT_VTK ? "volume.vtk"
-                     : format == LSM_FORMAT_NII ? "volume.nii"
-                     : format == LSM_FORMAT_NII_GZ ? "volume.nii.gz"
-                                                   : "volume.raw";
+  const char *name = stream_file_name(format);
   s->enc = mask ? ENC_U8 : format == LSM_FORMAT_VTK ? ENC_F32_BE : ENC_F32_LE;
   s->path = join_path(w->dir, name);
   if (!s->path) return lsm_fail(err, LSM_ERR_NOMEM, w->dir, "cannot allocate a file name");
