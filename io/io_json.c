@@ -68,8 +68,11 @@ typedef struct json_reader {
   int count;
   int found;
   double value;
-  int want_array;   /* seeking an array of numbers, not one number */
-  double *items;    /* its elements (up to capacity), counted in n_items */
+  int want_array;   /* seeking an array (of numbers, or of strings), not one number */
+  int want_strings; /* ... of strings */
+  double *items;    /* its numbers (up to capacity), counted in n_items */
+  const char **spans; /* or its strings: bytes between the quotes, escapes unresolved */
+  size_t *span_lengths;
   size_t capacity, n_items;
 } json_reader;
 
@@ -150,9 +153,9 @@ static int json_read_value(json_reader *r, int level, int on_path) {
   if (c == '{' || c == '[') { /* an object's members, an array's elements */
     const char close = c == '{' ? '}' : ']';
     /* the array sought: its elements are collected, and it is found when
-     * every one is a number (a later duplicate wins) */
+     * every one is a number (a string) (a later duplicate wins) */
     const int target = c == '[' && r->want_array && on_path && level == r->count;
-    int numbers = 1;
+    int all_kind = 1;
     if (target) r->n_items = 0;
     r->p++;
     json_space(r);
@@ -178,6 +181,7 @@ static int json_read_value(json_reader *r, int level, int on_path) {
       const char *value = r->p;
       if (!json_read_value(r, level + 1, match)) return 0;
       const int number = *value == '-' || (*value >= '0' && *value <= '9');
+      const int kind = r->want_strings ? *value == '"' : number; /* an element of the kind sought */
       if (match && level + 1 == r->count) {
         if (r->want_array) /* the member's value was read: found if the array sought */
           r->found = *value == '[' && r->found == 2;
@@ -187,9 +191,16 @@ static int json_read_value(json_reader *r, int level, int on_path) {
         }
       }
       if (target) {
-        if (number && r->n_items < r->capacity) r->items[r->n_items] = strtod(value, NULL);
-        r->n_items += number;
-        numbers &= number;
+        if (kind && r->n_items < r->capacity) {
+          if (r->want_strings) {
+            r->spans[r->n_items] = value + 1;
+            r->span_lengths[r->n_items] = (size_t)(r->p - value) - 2;
+          } else {
+            r->items[r->n_items] = strtod(value, NULL);
+          }
+        }
+        r->n_items += kind;
+        all_kind &= kind;
       }
       json_space(r);
       if (*r->p == ',') {
@@ -198,7 +209,7 @@ static int json_read_value(json_reader *r, int level, int on_path) {
       }
       if (*r->p != close) return 0;
       r->p++;
-      if (target) r->found = numbers ? 2 : 0; /* 2: an array of numbers, seen by the member */
+      if (target) r->found = all_kind ? 2 : 0; /* 2: an array of the kind, seen by the member */
       return 1;
     }
   }
@@ -241,4 +252,87 @@ int lsm_json_find_numbers(const char *text, const char *const *keys, int count, 
   if (!json_read_document(&r, text, error_at)) return -1;
   if (r.found) *n = r.n_items;
   return r.found;
+}
+
+int lsm_json_find_strings(const char *text, const char *const *keys, int count, const char **raw,
+                          size_t *raw_lengths, size_t capacity, size_t *n, size_t *error_at) {
+  const int buffers = raw && raw_lengths;
+  json_reader r = {.p = text, .keys = keys, .count = count, .want_array = 1, .want_strings = 1,
+                   .spans = raw, .span_lengths = raw_lengths, .capacity = buffers ? capacity : 0};
+  *n = 0;
+  if (!json_read_document(&r, text, error_at)) return -1;
+  if (r.found) *n = r.n_items;
+  return r.found;
+}
+
+static unsigned hex_value(const char *p) {
+  unsigned v = 0;
+  for (int k = 0; k < 4; ++k) {
+    const char c = p[k];
+    v = 16 * v + (unsigned)(c <= '9' ? c - '0' : (c | 0x20) - 'a' + 10);
+  }
+  return v;
+}
+
+/* Appends code point cp as UTF-8. */
+static size_t put_utf8(char *out, unsigned long cp) {
+  unsigned char *o = (unsigned char *)out;
+  if (cp < 0x800) {
+    o[0] = (unsigned char)(0xc0 | (cp >> 6));
+    o[1] = (unsigned char)(0x80 | (cp & 0x3f));
+    return 2;
+  }
+  if (cp < 0x10000) {
+    o[0] = (unsigned char)(0xe0 | (cp >> 12));
+    o[1] = (unsigned char)(0x80 | ((cp >> 6) & 0x3f));
+    o[2] = (unsigned char)(0x80 | (cp & 0x3f));
+    return 3;
+  }
+  o[0] = (unsigned char)(0xf0 | (cp >> 18));
+  o[1] = (unsigned char)(0x80 | ((cp >> 12) & 0x3f));
+  o[2] = (unsigned char)(0x80 | ((cp >> 6) & 0x3f));
+  o[3] = (unsigned char)(0x80 | (cp & 0x3f));
+  return 4;
+}
+
+size_t lsm_json_unescape(const char *raw, size_t length, char *out) {
+  static const char from[] = "\"\\/bfnrt", to[] = "\"\\/\b\f\n\r\t";
+  size_t n = 0;
+  for (size_t k = 0; k < length;) {
+    if (raw[k] != '\\') {
+      out[n++] = raw[k++];
+      continue;
+    }
+    if (k + 1 >= length) return (size_t)-1;
+    const char *e = strchr(from, raw[k + 1]);
+    if (raw[k + 1] != 'u') {
+      if (!raw[k + 1] || !e) return (size_t)-1;
+      out[n++] = to[e - from];
+      k += 2;
+      continue;
+    }
+    if (k + 6 > length) return (size_t)-1;
+    for (size_t j = k + 2; j < k + 6; ++j)
+      if (!is_hex(raw[j])) return (size_t)-1;
+    unsigned long cp = hex_value(raw + k + 2);
+    k += 6;
+    if (cp >= 0xd800 && cp <= 0xdbff) { /* a surrogate pair */
+      if (k + 6 > length || raw[k] != '\\' || raw[k + 1] != 'u') return (size_t)-1;
+      for (size_t j = k + 2; j < k + 6; ++j)
+        if (!is_hex(raw[j])) return (size_t)-1;
+      const unsigned low = hex_value(raw + k + 2);
+      if (low < 0xdc00 || low > 0xdfff) return (size_t)-1;
+      cp = 0x10000 + ((cp - 0xd800) << 10) + (low - 0xdc00);
+      k += 6;
+    } else if (cp >= 0xdc00 && cp <= 0xdfff) {
+      return (size_t)-1;
+    }
+    if (cp == 0) return (size_t)-1; /* no NUL inside a C string */
+    if (cp < 0x100)                 /* a byte, as lsm_json_string writes it */
+      out[n++] = (char)(unsigned char)cp;
+    else
+      n += put_utf8(out + n, cp);
+  }
+  out[n] = '\0';
+  return n;
 }

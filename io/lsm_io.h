@@ -282,6 +282,21 @@ int lsm_json_find_number(const char *text, const char *const *keys, int count, d
 int lsm_json_find_numbers(const char *text, const char *const *keys, int count, double *values,
                           size_t capacity, size_t *n, size_t *error_at);
 
+/* The same for an array of strings (run.json's input.files): raw[i] points
+ * into text at the bytes between element i's quotes, raw_lengths[i] bytes,
+ * escapes unresolved (lsm_json_unescape resolves them); raw and raw_lengths
+ * may be NULL with capacity 0, to learn n. */
+int lsm_json_find_strings(const char *text, const char *const *keys, int count, const char **raw,
+                          size_t *raw_lengths, size_t capacity, size_t *n, size_t *error_at);
+
+/* Resolves the escapes of a JSON string's raw bytes (length of them) into
+ * out, which must hold length + 1 bytes (nothing grows); NUL-terminated.  As
+ * lsm_json_string writes file names, \u0001 to \u00ff are the bytes of those
+ * values; a higher code point is written as UTF-8.  Returns the length, or
+ * (size_t)-1 on a malformed escape, a lone surrogate or \u0000 (no C
+ * string holds it). */
+size_t lsm_json_unescape(const char *raw, size_t length, char *out);
+
 /* Writes the JSON sidecar of a raw volume (sizes, spacing, origin, dtype,
  * endianness, data file name). */
 lsm_status lsm_raw_write_json(const char *path, const char *data_file,

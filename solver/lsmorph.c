@@ -1248,31 +1248,111 @@ static lsm_status result_input_positions(const char *text, const char *path, siz
   return LSM_OK;
 }
 
+/* Whether dir holds a run.json (a result folder given where the truth goes). */
+static int is_dir_with_run_json(const char *dir) {
+  char path[4200];
+  struct stat info;
+  snprintf(path, sizeof path, "%s/run.json", dir);
+  return stat(path, &info) == 0 && S_ISREG(info.st_mode);
+}
+
+/* The truth slice (0-based) that a result's first input is by the file names
+ * of its inputs (run.json's input.files): the truth slice of the first name,
+ * when input i is named as truth slice first + offsets[i] is, for every one
+ * of the n inputs.  Returns 0 (nothing inferred) otherwise: inputs renamed,
+ * from another stack, or a run.json without names. */
+static int first_by_names(const char *text, char **truth, size_t n_truth, const size_t *offsets,
+                          size_t n, size_t *first) {
+  static const char *const files_key[] = {"input", "files"};
+  size_t m = 0;
+  if (n == 0 || lsm_json_find_strings(text, files_key, 2, NULL, NULL, 0, &m, NULL) != 1 || m != n)
+    return 0;
+  const char **raw = calloc(n, sizeof *raw);
+  size_t *len = calloc(n, sizeof *len), longest = 0;
+  char *name = NULL;
+  int found = 0;
+  if (raw && len) lsm_json_find_strings(text, files_key, 2, raw, len, n, &m, NULL);
+  for (size_t i = 0; raw && len && i < n; ++i) longest = len[i] > longest ? len[i] : longest;
+  if (raw && len) name = malloc(longest + 1);
+  for (size_t i = 0; name && i < n; ++i) {
+    if (lsm_json_unescape(raw[i], len[i], name) == (size_t)-1) break;
+    if (i == 0) {
+      for (size_t j = 0; j < n_truth && !found; ++j)
+        if (strcmp(base_name(truth[j]), name) == 0) {
+          found = 1;
+          *first = j;
+        }
+      if (!found) break;
+    }
+    if (*first + offsets[i] >= n_truth || strcmp(base_name(truth[*first + offsets[i]]), name) != 0) {
+      found = 0;
+      break;
+    }
+  }
+  free(name);
+  free(len);
+  free(raw);
+  return found;
+}
+
 /* The truth slices that are a result's inputs (0-based, increasing): every
- * --stride-th from --first (*inputs: run.json's input count, 0 without one),
- * or, with no --stride, where run.json's input heights put them. */
-static lsm_status score_kept(const lsm_cli *cli, const char *from, size_t n_truth, size_t **kept,
-                             size_t *n_kept, size_t *inputs, lsm_err *err) {
-  const size_t first = cli->first > 0 ? (size_t)cli->first - 1 : 0, k = (size_t)cli->stride;
-  if (k && n_truth <= first + k) /* nothing held out between two inputs */
-    return lsm_fail(err, LSM_ERR_INPUT, cli->truth_dir,
-                    "%zu PNG files: --stride %zu%s needs at least %zu to hold any out", n_truth, k,
-                    from, first + k + 1);
+ * --stride-th from the first, or, with no --stride, where run.json's input
+ * heights put them; the first is --first, else the truth slice named as the
+ * first input when every input is named as its truth slice (first_by_names),
+ * else the first truth slice.  *inputs: run.json's input count with
+ * --stride, 0 without a run.json; from: " from slice N" where the inputs do
+ * not start at the first truth slice. */
+static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, char from[64],
+                             size_t **kept, size_t *n_kept, size_t *inputs, lsm_err *err) {
+  const size_t k = (size_t)cli->stride;
+  size_t first = cli->first > 0 ? (size_t)cli->first - 1 : 0;
   char path[4200], *text = NULL;
   LSM_TRY(read_run_json(cli->result_dir, path, &text, err));
   lsm_status st = LSM_OK;
-  if (k) {
+  size_t *offsets = NULL, n_offsets = 0; /* the inputs' truth slices less the first's */
+  if (!k && !text) {
+    st = lsm_fail(err, LSM_ERR_USAGE, cli->result_dir,
+                  "has no run.json to say which slices were its inputs: give --stride K%s",
+                  is_dir_with_run_json(cli->truth_dir)
+                      ? " (or swap the folders: the truth comes first, then the result)"
+                      : "");
+  } else if (k && text) {
+    st = result_input_count(text, path, inputs, err);
+    if (st == LSM_OK) offsets = lsm_alloc(*inputs, sizeof *offsets, err, "slice list");
+    if (st == LSM_OK && !offsets) st = err ? err->status : LSM_ERR_NOMEM;
+    for (size_t i = 0; st == LSM_OK && i < *inputs; ++i) offsets[i] = i * k;
+    n_offsets = *inputs;
+  } else if (!k) {
+    st = result_input_positions(text, path, 0, &offsets, &n_offsets, err);
+  }
+  int named = 0;
+  if (st == LSM_OK && cli->first == 0 && text)
+    named = first_by_names(text, truth, n_truth, offsets, n_offsets, &first);
+  free(text);
+  if (first > 0) snprintf(from, 64, " from slice %zu", first + 1);
+  if (st == LSM_OK && named && first > 0) {
+    fprintf(stderr,
+            "lsmorph: note: the inputs are named as truth slices %zu", first + offsets[0] + 1);
+    for (size_t i = 1; i < n_offsets && i < 3; ++i) fprintf(stderr, ", %zu", first + offsets[i] + 1);
+    fprintf(stderr, "%s of %s (run.json's input.files), so the first input is truth slice %zu "
+                    "(--first 1 counts from the first truth slice instead)\n",
+            n_offsets > 3 ? ", ..." : "", cli->truth_dir, first + 1);
+  }
+  if (st == LSM_OK && k && n_truth <= first + k) /* nothing held out between two inputs */
+    st = lsm_fail(err, LSM_ERR_INPUT, cli->truth_dir,
+                  "%zu PNG files: --stride %zu%s needs at least %zu to hold any out", n_truth, k,
+                  from, first + k + 1);
+  if (st == LSM_OK && k) {
     *n_kept = (n_truth - 1 - first) / k + 1;
     *kept = lsm_alloc(*n_kept, sizeof **kept, err, "slice list");
     if (!*kept) st = err ? err->status : LSM_ERR_NOMEM;
     for (size_t i = 0; st == LSM_OK && i < *n_kept; ++i) (*kept)[i] = first + i * k;
-    if (st == LSM_OK && text) st = result_input_count(text, path, inputs, err);
-  } else if (!text) {
-    st = lsm_fail(err, LSM_ERR_USAGE, cli->result_dir,
-                  "has no run.json to say which slices were its inputs: give --stride K");
-  } else {
-    st = result_input_positions(text, path, first, kept, n_kept, err);
-    if (st == LSM_OK && (*kept)[*n_kept - 1] >= n_truth)
+  } else if (st == LSM_OK) {
+    for (size_t i = 0; i < n_offsets; ++i) offsets[i] += first;
+    *kept = offsets;
+    *n_kept = n_offsets;
+    offsets = NULL;
+    if ((*kept)[*n_kept - 1] >= n_truth)
       st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
                     "its last input lies at truth slice %zu (run.json's heights and dz, the first "
                     "at slice %zu), but %s has %zu slices (score needs --dz equal to the truth's "
@@ -1283,7 +1363,7 @@ static lsm_status score_kept(const lsm_cli *cli, const char *from, size_t n_trut
                     "its inputs are truth slices %zu to %zu, every one: none is held out to score",
                     first + 1, (*kept)[*n_kept - 1] + 1);
   }
-  free(text);
+  free(offsets);
   if (st != LSM_OK) {
     free(*kept);
     *kept = NULL;
@@ -1305,8 +1385,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   LSM_TRY(lsm_dir_list_png(cli->truth_dir, &truth, &n, NULL, err));
   size_t inputs = 0; /* run.json's input count, with --stride */
   char from[64] = ""; /* where --stride starts, when not at the first slice */
-  if (cli->first > 1) snprintf(from, sizeof from, " from slice %ld", cli->first);
-  lsm_status st = score_kept(cli, from, n, &kept, &n_kept, &inputs, err);
+  lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, err);
   lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;

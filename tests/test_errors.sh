@@ -340,12 +340,30 @@ if [ $rc -eq 0 ] && grep -q '"held_out": 3,' "$TMP/stdout" && cmp -s "$TMP/stdou
 else
   bad "score of slices 2, 4, 6, 8 with --first 2: exit $rc: $(cat "$TMP/stdout" "$TMP/stdout2" "$TMP/stderr")"
 fi
+# without --first, the inputs' names (run.json's input.files) say where they lie
+"$LSM" score tall r-even >"$TMP/stdout2" 2>"$TMP/stderr" &&
+  "$LSM" score tall r-even --stride 2 >"$TMP/stdout3" 2>>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && cmp -s "$TMP/stdout" "$TMP/stdout2" && cmp -s "$TMP/stdout" "$TMP/stdout3" &&
+  [ "$(grep -c -F "lsmorph: note: the inputs are named as truth slices 2, 4, 6, ... of tall (run.json's input.files), so the first input is truth slice 2 (--first 1 counts from the first truth slice instead)" "$TMP/stderr")" -eq 2 ]; then
+  ok
+else
+  bad "score of slices 2, 4, 6, 8 kept under their names, no --first: exit $rc: $(cat "$TMP/stdout2" "$TMP/stdout3" "$TMP/stderr")"
+fi
 expect "score: an offset result taken from slice 1" 1 \
   "r-even/slices/00001.png: differs from the truth slice tall/1.png, which run.json's input heights make an input, the first input taken as truth slice 1 (--first N if it is slice N)" - \
-  score tall r-even
+  score tall r-even --first 1
 expect "score: an offset result with --stride from slice 1" 1 \
   "r-even/slices: 7 slices, but slices 1, 3, 5, ... of the 9 truth slices, reconstructed with --spacing 2 and the default --dz, give 9" - \
-  score tall r-even --stride 2
+  score tall r-even --stride 2 --first 1
+# renamed inputs (tall's 2, 4, 6, 8 as 1.png to 4.png): the names say nothing, the first input
+# is taken as truth slice 1, and its slice does not come back
+mkdir -p tall-renamed && cp tall/2.png tall-renamed/1.png && cp tall/4.png tall-renamed/2.png &&
+  cp tall/6.png tall-renamed/3.png && cp tall/8.png tall-renamed/4.png &&
+  "$LSM" reconstruct tall-renamed -o r-renamed --spacing 2 -q --no-preview >/dev/null 2>&1 || bad "reconstruct tall-renamed"
+expect "score: renamed inputs" 1 \
+  "r-renamed/slices/00001.png: differs from the truth slice tall/1.png, which run.json's input heights make an input, the first input taken as truth slice 1 (--first N if it is slice N)" - \
+  score tall r-renamed
 expect "score: an offset result from the wrong --first" 1 \
   "r-even/slices/00001.png: differs from the truth slice tall/3.png, which run.json's input heights make an input, the first input taken as truth slice 3" - \
   score tall r-even --first 3
@@ -354,6 +372,9 @@ expect "score: --stride from a late --first" 1 "tall: 9 PNG files: --stride 2 fr
 expect "score: bad --first" 2 "--first: 0 is out of range" - score tall r4 --first 0
 expect "score: no --stride and no run.json" 2 \
   "r4-bare: has no run.json to say which slices were its inputs: give --stride K" - score tall r4-bare
+expect "score: the folders swapped" 2 \
+  "tall: has no run.json to say which slices were its inputs: give --stride K (or swap the folders: the truth comes first, then the result)" - \
+  score r-even tall
 expect "score: no --stride and a run.json without heights" 1 \
   "r4-uncounted/run.json: does not give the input heights (input.heights): give --stride K" - score tall r4-uncounted
 cp -r r4 r4-half && /usr/bin/python3 -c '

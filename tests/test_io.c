@@ -1499,12 +1499,73 @@ static void test_json_find_numbers(void **state) {
   assert_int_equal(at, 23);
 }
 
+/* lsm_json_find_strings and lsm_json_unescape: run.json's input.files read
+ * back as the names lsm_json_string wrote, whatever the bytes. */
+static void test_json_find_strings(void **state) {
+  (void)state;
+  static const char *const path[] = {"input", "files"};
+  const char *raw[4] = {NULL, NULL, NULL, NULL};
+  size_t len[4] = {0, 0, 0, 0}, n = 99, at = 0;
+  const char *run = "{\"input\": {\"heights\": [1, 9], \"files\":\n"
+                    "  [ \"001.png\" ,\"a\\\"b\\\\c.png\",\t\"\" ]}, \"options\": {\"files\": [\"x\"]}}";
+  assert_int_equal(lsm_json_find_strings(run, path, 2, NULL, NULL, 0, &n, &at), 1);
+  assert_int_equal(n, 3);
+  assert_int_equal(lsm_json_find_strings(run, path, 2, raw, len, 4, &n, &at), 1);
+  assert_int_equal(n, 3);
+  assert_true(len[0] == 7 && memcmp(raw[0], "001.png", 7) == 0);
+  assert_true(len[1] == 11 && memcmp(raw[1], "a\\\"b\\\\c.png", 11) == 0);
+  assert_true(len[2] == 0 && raw[3] == NULL);
+  char out[32];
+  assert_int_equal(lsm_json_unescape(raw[1], len[1], out), 9);
+  assert_string_equal(out, "a\"b\\c.png");
+  /* a buffer shorter than the array: its first elements, and the length */
+  raw[0] = raw[1] = NULL;
+  assert_int_equal(lsm_json_find_strings(run, path, 2, raw, len, 1, &n, &at), 1);
+  assert_true(n == 3 && raw[0] && raw[1] == NULL);
+  /* not an array of strings, or not there; invalid JSON */
+  static const char *const none[] = {"{\"input\":{\"files\":[\"a\",1]}}",
+                                     "{\"input\":{\"files\":\"a\"}}", "{\"files\":[\"a\"]}"};
+  for (size_t k = 0; k < sizeof none / sizeof none[0]; ++k) {
+    n = 99;
+    assert_int_equal(lsm_json_find_strings(none[k], path, 2, raw, len, 4, &n, &at), 0);
+    assert_int_equal(n, 0);
+  }
+  assert_int_equal(lsm_json_find_strings("{\"input\":{\"files\":[\"a]}}", path, 2, raw, len, 4, &n, &at),
+                   -1);
+
+  /* a name with bytes that are not UTF-8 and a control byte comes back as it
+   * was written; other escapes as JSON means them */
+  const char name[] = "s\xe9\x01\xc3\xa9/\xff.png";
+  char *text = NULL;
+  size_t size = 0;
+  FILE *f = open_memstream(&text, &size);
+  assert_non_null(f);
+  lsm_json_string(f, name);
+  assert_int_equal(fclose(f), 0);
+  assert_true(size >= 2 && text[0] == '"' && text[size - 1] == '"');
+  assert_int_equal(lsm_json_unescape(text + 1, size - 2, out), strlen(name));
+  assert_string_equal(out, name);
+  free(text);
+  static const struct {
+    const char *raw, *want;
+  } cases[] = {{"\\u20ac \\n\\t\\/", "\xe2\x82\xac \n\t/"},
+               {"\\ud83d\\ude00", "\xf0\x9f\x98\x80"}};
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+    assert_int_equal(lsm_json_unescape(cases[k].raw, strlen(cases[k].raw), out), strlen(cases[k].want));
+    assert_string_equal(out, cases[k].want);
+  }
+  static const char *const bad[] = {"\\u0000", "\\ud83d", "\\ude00", "\\ud83dx", "\\q", "\\", "\\u12"};
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k)
+    assert_true(lsm_json_unescape(bad[k], strlen(bad[k]), out) == (size_t)-1);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_natural_cmp),
       cmocka_unit_test(test_name_number),
       cmocka_unit_test(test_json_find_number),
       cmocka_unit_test(test_json_find_numbers),
+      cmocka_unit_test(test_json_find_strings),
       cmocka_unit_test(test_heights_good),
       cmocka_unit_test(test_heights_bad),
       cmocka_unit_test_setup_teardown(test_heights_read, setup_tmp, teardown_tmp),
