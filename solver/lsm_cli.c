@@ -14,7 +14,7 @@ static const char general_help[] =
     "\n"
     "Usage:\n"
     "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
-    "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N]\n"
+    "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
     "  lsmorph devices\n"
     "  lsmorph --help [COMMAND] | --version | help reconstruct|score|devices\n"
     "\n"
@@ -209,7 +209,7 @@ static const char reconstruct_help_files[] =
     "only when it is empty or an earlier result (it has a run.json).\n";
 
 static const char score_help[] =
-    "Usage: lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N]\n"
+    "Usage: lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
     "\n"
     "Scores a reconstruction made from some of the slices of TRUTH_DIR (a full\n"
     "stack, in natural order) against the slices left out between them.  Which\n"
@@ -246,6 +246,11 @@ static const char score_help[] =
     "  mean_surface     mean surface distance over the slices non-empty on both sides\n"
     "  volume_error     (result - truth) / truth volume over the held-out slices\n"
     "  one_sided_empty  held-out slices empty on one side only\n"
+    "  slices           with --per-slice: one object per held-out slice, in order:\n"
+    "                   truth (its number, from 1), file, between (the truth\n"
+    "                   numbers of the inputs below and above it), dice, hd95,\n"
+    "                   mean_surface (null unless non-empty on both sides),\n"
+    "                   area_result, area_truth (pixels)\n"
     "A score that is undefined is null: the distances where no slice has a boundary,\n"
     "the volume error where the truth is empty.\n"
     "The folders come in that order: TRUTH_DIR has no run.json, OUT_DIR has one.\n"
@@ -599,6 +604,8 @@ static lsm_status parse_score(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       const char *v = NULL;
       LSM_TRY(take_value(c, "--first", arg[7] == '=' ? arg + 8 : NULL, &v, err));
       LSM_TRY(parse_int("--first", v, 1, 1000000000, &cli->first, err));
+    } else if (option && strcmp(arg, "--per-slice") == 0) {
+      cli->per_slice = 1;
     } else if (option) {
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s' (see 'lsmorph help score')", arg);
     } else if (!cli->truth_dir) {

@@ -52,6 +52,7 @@ typedef struct lsm_cli {
   const char *result_dir;
   int stride;                /* score: input slices were every stride-th (0: from run.json) */
   long first;                /* score: the first input is this truth slice (from 1; 0: not given) */
+  int per_slice;             /* score --per-slice: each held-out slice's scores too */
 } lsm_cli;
 
 /* Parses argv (argv[0] is the program).  Returns LSM_OK, or LSM_ERR_USAGE

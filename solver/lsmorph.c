@@ -1391,6 +1391,14 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
   double *pool = NULL;
   const size_t first = n_kept ? kept[0] : 0, last = n_kept ? kept[n_kept - 1] : 0;
+  /* --per-slice: each held-out slice's scores, and its truth slice */
+  lsm_slice_score *per = NULL;
+  size_t *per_at = NULL;
+  if (st == LSM_OK && cli->per_slice) {
+    per = lsm_alloc(last - first + 1, sizeof *per, err, "per-slice scores");
+    per_at = lsm_alloc(last - first + 1, sizeof *per_at, err, "per-slice scores");
+    if (!per || !per_at) st = err ? err->status : LSM_ERR_NOMEM;
+  }
   /* truth stored as 0/1 labels is read as such (the result slices are
    * 0/255), decided as reconstruct decided it: over the kept slices alone
    * (one bright pixel in a held-out slice must not change how they read) */
@@ -1464,6 +1472,10 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     }
     lsm_slice_score s;
     if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, &pool, &pool_n, &pool_cap, err);
+    if (st == LSM_OK && per) {
+      per[count] = s;
+      per_at[count] = k;
+    }
     if (st == LSM_OK) {
       dice += s.dice;
       vol_r += (double)s.area_result;
@@ -1481,11 +1493,15 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     lsm_mask_free(&a);
     lsm_mask_free(&b);
   }
-  lsm_path_list_free(truth, n);
-  free(kept);
   double pooled = lsm_quantile(pool, pool_n, 0.95);
   free(pool);
-  if (st != LSM_OK) return st;
+  if (st != LSM_OK) {
+    lsm_path_list_free(truth, n);
+    free(kept);
+    free(per);
+    free(per_at);
+    return st;
+  }
   if (first == 1)
     fprintf(stderr, "lsmorph: note: truth slice 1 lies before the first kept slice (2) and is "
                     "not scored\n");
@@ -1518,7 +1534,30 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   lsm_json_number(stdout, measured ? msd / (double)measured : NAN);
   printf(", \"volume_error\": ");
   lsm_json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
-  printf(", \"one_sided_empty\": %zu}\n", incomparable);
+  printf(", \"one_sided_empty\": %zu", incomparable);
+  if (per) {
+    printf(", \"slices\": [");
+    for (size_t i = 0, below = 0; i < count; ++i) {
+      const lsm_slice_score *p = &per[i];
+      const int measured_here = p->comparable && (p->area_result || p->area_truth);
+      while (below + 1 < n_kept && kept[below + 1] < per_at[i]) ++below;
+      printf("%s{\"truth\": %zu, \"file\": ", i ? ", " : "", per_at[i] + 1);
+      lsm_json_string(stdout, base_name(truth[per_at[i]]));
+      printf(", \"between\": [%zu, %zu], \"dice\": ", kept[below] + 1, kept[below + 1] + 1);
+      lsm_json_number(stdout, p->dice);
+      printf(", \"hd95\": ");
+      lsm_json_number(stdout, measured_here ? p->hd95 : NAN);
+      printf(", \"mean_surface\": ");
+      lsm_json_number(stdout, measured_here ? p->mean_surface : NAN);
+      printf(", \"area_result\": %zu, \"area_truth\": %zu}", p->area_result, p->area_truth);
+    }
+    printf("]");
+  }
+  printf("}\n");
+  lsm_path_list_free(truth, n);
+  free(kept);
+  free(per);
+  free(per_at);
   return check_stdout(err);
 }
 

@@ -618,6 +618,21 @@ rc=$?
 check "score of 0/1 label truth with a bright pixel held out: exit 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "score of 0/1 label truth with a bright pixel held out: Dice above 0.9 ($(cat "$TMP/o"))" \
   awk -F'"dice_volume": ' '{ split($2, v, ","); exit !(v[1] > 0.9) }' "$TMP/o"
+# --per-slice: the same scores, and each held-out slice's, which the means come from
+"$LSM" score "$TMP/labtruth" "$TMP/out-labkept" --stride 2 --per-slice >"$TMP/o2" 2>"$TMP/e"
+check "score --per-slice: exit 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+check "score --per-slice: slices 2 and 4 between their inputs, the means theirs, the rest as without ($(cat "$TMP/o2"))" \
+  /usr/bin/python3 -c '
+import json, sys
+plain, per = (json.load(open(f)) for f in sys.argv[1:3])
+rows = per.pop("slices")
+assert per == plain, (per, plain)
+assert [r["truth"] for r in rows] == [2, 4] and [r["file"] for r in rows] == ["2.png", "4.png"]
+assert [r["between"] for r in rows] == [[1, 3], [3, 5]]
+assert abs(sum(r["dice"] for r in rows) / 2 - plain["dice"]) < 1e-12
+assert abs(sum(r["hd95"] for r in rows) / 2 - plain["hd95"]) < 1e-12
+assert all(r["area_truth"] > 0 and r["area_result"] > 0 for r in rows)
+' "$TMP/o" "$TMP/o2"
 # a label map (labels 1 and 200): the dark label reads as background, and a note says so;
 # a drawn mask (0/255 with no dark grey) gets no such note
 mkdir -p "$TMP/labmap"

@@ -78,6 +78,11 @@ static void test_score_options(void **state) {
   assert_int_equal(parse(&cli, &err, 7, both), LSM_OK);
   assert_int_equal(cli.first, 5);
   assert_int_equal(cli.stride, 8);
+  assert_int_equal(cli.per_slice, 0);
+  char *per[] = {"lsmorph", "score", "truth", "--per-slice", "out"};
+  assert_int_equal(parse(&cli, &err, 5, per), LSM_OK);
+  assert_int_equal(cli.per_slice, 1);
+  assert_string_equal(cli.result_dir, "out");
   char *bad[] = {"lsmorph", "score", "truth", "out", "--first", "x"};
   assert_int_equal(parse(&cli, &err, 6, bad), LSM_ERR_USAGE);
   assert_non_null(strstr(err.msg, "--first"));
