@@ -109,6 +109,15 @@ size_t lsm_volume_file_names(unsigned formats, const char **names, size_t cap) {
   return n;
 }
 
+void lsm_volume_geometry_text(const lsm_volume_info *info, char spacing[3][32],
+                              char origin[3][32]) {
+  const double sv[3] = {info->sx, info->sy, info->sz}, ov[3] = {info->ox, info->oy, info->oz};
+  for (int k = 0; k < 3; ++k) {
+    lsm_shortest_number(spacing[k], sizeof spacing[k], sv[k]);
+    lsm_shortest_number(origin[k], sizeof origin[k], ov[k]);
+  }
+}
+
 /* ---- the NRRD header for mask volumes (uchar): io_nrrd.c builds it ---------------------- */
 
 static size_t nrrd_u8_header(char *out, size_t cap, const lsm_volume_info *v) {

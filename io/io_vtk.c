@@ -15,12 +15,8 @@ size_t lsm_vtk_header(char *out, size_t cap, const lsm_volume_info *info) {
   if (!out || !info || cap == 0) return 0;
   const int mask = info->values == LSM_VALUES_MASK;
   size_t points = (size_t)info->nx * (size_t)info->ny * info->nz;
-  char o[3][32], sp[3][32]; /* shortest round-trip forms: 0.8, not 0.80000000000000004 */
-  const double ov[3] = {info->ox, info->oy, info->oz}, sv[3] = {info->sx, info->sy, info->sz};
-  for (int k = 0; k < 3; ++k) {
-    lsm_shortest_number(o[k], sizeof o[k], ov[k]);
-    lsm_shortest_number(sp[k], sizeof sp[k], sv[k]);
-  }
+  char sp[3][32], o[3][32];
+  lsm_volume_geometry_text(info, sp, o);
   int len = snprintf(out, cap,
                      "# vtk DataFile Version 3.0\n"
                      "lsmorph %s (%s), physical units\n"

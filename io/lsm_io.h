@@ -213,6 +213,10 @@ typedef struct lsm_volume_info {
  * the header and a NUL into out and returns its length, or 0 if cap is too
  * small. */
 size_t lsm_mha_header(char *out, size_t cap, const lsm_volume_info *info);
+/* The spacings and origin of info as the headers print them: each in its
+ * shortest round-trip form (0.8, not 0.80000000000000004). */
+void lsm_volume_geometry_text(const lsm_volume_info *info, char spacing[3][32],
+                              char origin[3][32]);
 size_t lsm_vtk_header(char *out, size_t cap, const lsm_volume_info *info);
 
 /* NIfTI-1 ("n+1", one file): the 348-byte header and the 4-byte extension

@@ -1372,6 +1372,12 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
   return st;
 }
 
+/* A held-out slice's distances count in the means: non-empty on both sides
+ * (one side empty: distances undefined; both empty: no boundary to measure). */
+static int has_distances(const lsm_slice_score *s) {
+  return s->comparable && (s->area_result || s->area_truth);
+}
+
 /* Whatever went to standard output (help, version, the device list, the scores) reached it. */
 static lsm_status check_stdout(lsm_err *err) {
   if (fflush(stdout) != 0 || ferror(stdout))
@@ -1481,9 +1487,8 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
       vol_r += (double)s.area_result;
       vol_t += (double)s.area_truth;
       inter += s.dice * (double)(s.area_result + s.area_truth) / 2.0;
-      if (!s.comparable) {
-        incomparable++;
-      } else if (s.area_result || s.area_truth) { /* both empty: no boundary to measure */
+      incomparable += !s.comparable;
+      if (has_distances(&s)) {
         hd95 += s.hd95;
         msd += s.mean_surface;
         measured++;
@@ -1495,70 +1500,65 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   }
   double pooled = lsm_quantile(pool, pool_n, 0.95);
   free(pool);
-  if (st != LSM_OK) {
-    lsm_path_list_free(truth, n);
-    free(kept);
-    free(per);
-    free(per_at);
-    return st;
-  }
-  if (first == 1)
-    fprintf(stderr, "lsmorph: note: truth slice 1 lies before the first kept slice (2) and is "
-                    "not scored\n");
-  else if (first > 1)
-    fprintf(stderr,
-            "lsmorph: note: truth slices 1 to %zu lie before the first kept slice (%zu) and are "
-            "not scored\n",
-            first, first + 1);
-  if (last + 2 == n)
-    fprintf(stderr,
-            "lsmorph: note: truth slice %zu lies past the last kept slice (%zu) and is not "
-            "scored (nothing is extrapolated past it)\n",
-            n, last + 1);
-  else if (last + 2 < n)
-    fprintf(stderr,
-            "lsmorph: note: truth slices %zu to %zu lie past the last kept slice (%zu) and are "
-            "not scored (nothing is extrapolated past it)\n",
-            last + 2, n, last + 1);
-  /* undefined scores (no held-out slice, no boundary on both sides, an empty
-   * truth) are JSON null, as in run.json */
-  printf("{\"held_out\": %zu, \"dice_volume\": ", count);
-  lsm_json_number(stdout, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0);
-  printf(", \"dice\": ");
-  lsm_json_number(stdout, count ? dice / (double)count : NAN);
-  printf(", \"hd95\": ");
-  lsm_json_number(stdout, measured ? hd95 / (double)measured : NAN);
-  printf(", \"hd95_pooled\": ");
-  lsm_json_number(stdout, pooled);
-  printf(", \"mean_surface\": ");
-  lsm_json_number(stdout, measured ? msd / (double)measured : NAN);
-  printf(", \"volume_error\": ");
-  lsm_json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
-  printf(", \"one_sided_empty\": %zu", incomparable);
-  if (per) {
-    printf(", \"slices\": [");
-    for (size_t i = 0, below = 0; i < count; ++i) {
-      const lsm_slice_score *p = &per[i];
-      const int measured_here = p->comparable && (p->area_result || p->area_truth);
-      while (below + 1 < n_kept && kept[below + 1] < per_at[i]) ++below;
-      printf("%s{\"truth\": %zu, \"file\": ", i ? ", " : "", per_at[i] + 1);
-      lsm_json_string(stdout, base_name(truth[per_at[i]]));
-      printf(", \"between\": [%zu, %zu], \"dice\": ", kept[below] + 1, kept[below + 1] + 1);
-      lsm_json_number(stdout, p->dice);
-      printf(", \"hd95\": ");
-      lsm_json_number(stdout, measured_here ? p->hd95 : NAN);
-      printf(", \"mean_surface\": ");
-      lsm_json_number(stdout, measured_here ? p->mean_surface : NAN);
-      printf(", \"area_result\": %zu, \"area_truth\": %zu}", p->area_result, p->area_truth);
+  if (st == LSM_OK) {
+    if (first == 1)
+      fprintf(stderr, "lsmorph: note: truth slice 1 lies before the first kept slice (2) and is "
+                      "not scored\n");
+    else if (first > 1)
+      fprintf(stderr,
+              "lsmorph: note: truth slices 1 to %zu lie before the first kept slice (%zu) and are "
+              "not scored\n",
+              first, first + 1);
+    if (last + 2 == n)
+      fprintf(stderr,
+              "lsmorph: note: truth slice %zu lies past the last kept slice (%zu) and is not "
+              "scored (nothing is extrapolated past it)\n",
+              n, last + 1);
+    else if (last + 2 < n)
+      fprintf(stderr,
+              "lsmorph: note: truth slices %zu to %zu lie past the last kept slice (%zu) and are "
+              "not scored (nothing is extrapolated past it)\n",
+              last + 2, n, last + 1);
+    /* undefined scores (no held-out slice, no boundary on both sides, an empty
+     * truth) are JSON null, as in run.json */
+    printf("{\"held_out\": %zu, \"dice_volume\": ", count);
+    lsm_json_number(stdout, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0);
+    printf(", \"dice\": ");
+    lsm_json_number(stdout, count ? dice / (double)count : NAN);
+    printf(", \"hd95\": ");
+    lsm_json_number(stdout, measured ? hd95 / (double)measured : NAN);
+    printf(", \"hd95_pooled\": ");
+    lsm_json_number(stdout, pooled);
+    printf(", \"mean_surface\": ");
+    lsm_json_number(stdout, measured ? msd / (double)measured : NAN);
+    printf(", \"volume_error\": ");
+    lsm_json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
+    printf(", \"one_sided_empty\": %zu", incomparable);
+    if (per) {
+      printf(", \"slices\": [");
+      for (size_t i = 0, below = 0; i < count; ++i) {
+        const lsm_slice_score *p = &per[i];
+        while (below + 1 < n_kept && kept[below + 1] < per_at[i]) ++below;
+        printf("%s{\"truth\": %zu, \"file\": ", i ? ", " : "", per_at[i] + 1);
+        lsm_json_string(stdout, base_name(truth[per_at[i]]));
+        printf(", \"between\": [%zu, %zu], \"dice\": ", kept[below] + 1, kept[below + 1] + 1);
+        lsm_json_number(stdout, p->dice);
+        printf(", \"hd95\": ");
+        lsm_json_number(stdout, has_distances(p) ? p->hd95 : NAN);
+        printf(", \"mean_surface\": ");
+        lsm_json_number(stdout, has_distances(p) ? p->mean_surface : NAN);
+        printf(", \"area_result\": %zu, \"area_truth\": %zu}", p->area_result, p->area_truth);
+      }
+      printf("]");
     }
-    printf("]");
+    printf("}\n");
+    st = check_stdout(err);
   }
-  printf("}\n");
   lsm_path_list_free(truth, n);
   free(kept);
   free(per);
   free(per_at);
-  return check_stdout(err);
+  return st;
 }
 
 /* With file descriptor 0, 1 or 2 closed by the caller, the first file opened
