@@ -48,13 +48,13 @@ int lsm_natural_cmp(const char *a, const char *b) {
   return c < 0 ? -1 : (c > 0 ? 1 : 0);
 }
 
-static const char *base_name(const char *path) {
+const char *lsm_base_name(const char *path) {
   const char *slash = strrchr(path, '/');
   return slash ? slash + 1 : path;
 }
 
 int lsm_name_number(const char *path, uint64_t *number) {
-  const char *name = base_name(path), *dot = strrchr(name, '.');
+  const char *name = lsm_base_name(path), *dot = strrchr(name, '.');
   const char *end = dot && dot != name ? dot : name + strlen(name);
   while (end > name && !is_digit(end[-1])) --end;
   const char *start = end;
@@ -69,7 +69,7 @@ int lsm_name_number(const char *path, uint64_t *number) {
 
 static int cmp_paths(const void *a, const void *b) {
   const char *pa = *(const char *const *)a, *pb = *(const char *const *)b;
-  return lsm_natural_cmp(base_name(pa), base_name(pb));
+  return lsm_natural_cmp(lsm_base_name(pa), lsm_base_name(pb));
 }
 
 /* Whether name ends in "." ext, any case. */

@@ -82,6 +82,9 @@ lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, size_
                             lsm_err *err);
 void lsm_path_list_free(char **paths, size_t count);
 
+/* The part of path after its last '/' (path itself when it has none). */
+const char *lsm_base_name(const char *path);
+
 /* The number a slice's file name ends with: the last run of digits in the
  * base name of path before its extension ("slice_0009.png" -> 9, "12b.png"
  * -> 12).  Returns 1 with *number set, or 0 when the name has no digits or

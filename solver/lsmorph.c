@@ -36,11 +36,6 @@ static double wall_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static const char *base_name(const char *path) {
-  const char *s = strrchr(path, '/');
-  return s ? s + 1 : path;
-}
-
 /* ---- removing a folder tree (temporary results) ------------------------------------ */
 
 static int remove_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw) {
@@ -228,7 +223,7 @@ static void note_filled_outlines(const png_source *src, const char *dir) {
               "lsmorph: note: %s: --input outline, but %s looks filled (%.0f %% of its foreground "
               "pixels are interior): outlines are thin closed contours; filled regions need "
               "--input mask\n",
-              dir, base_name(src->paths[k]), 100.0 * (double)interior / (double)fg);
+              dir, lsm_base_name(src->paths[k]), 100.0 * (double)interior / (double)fg);
     return;
   }
 }
@@ -272,7 +267,7 @@ static lsm_status input_heights(const lsm_cli *cli, char *const *paths, size_t c
       return lsm_fail(err, LSM_ERR_INPUT, paths[k],
                       "--heights-from-names: its number %" PRIu64 " does not follow %s's %" PRIu64
                       " (the numbers must increase in the files' natural order)",
-                      n, base_name(paths[k - 1]), previous);
+                      n, lsm_base_name(paths[k - 1]), previous);
     }
     previous = n;
     z[k] = (double)n * cli->spacing;
@@ -526,7 +521,7 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
           height);
   for (size_t k = 0; k < src->count; ++k) {
     if (k) fputs(", ", f);
-    lsm_json_string(f, base_name(src->paths[k]));
+    lsm_json_string(f, lsm_base_name(src->paths[k]));
   }
   fputs("], \"heights\": [", f);
   for (size_t k = 0; k < src->count; ++k) {
@@ -552,9 +547,9 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   for (size_t k = 0; k + 1 < src->count; ++k) {
     const lsm_pair_stats *p = &stats[k];
     fputs("    {\"source\": ", f);
-    lsm_json_string(f, base_name(src->paths[p->source]));
+    lsm_json_string(f, lsm_base_name(src->paths[p->source]));
     fputs(", \"target\": ", f);
-    lsm_json_string(f, base_name(src->paths[p->target]));
+    lsm_json_string(f, lsm_base_name(src->paths[p->target]));
     fprintf(f, ", \"iterations\": %d, \"dt\": ", p->iterations);
     lsm_json_number(f, p->dt);
     fputs(", \"cp\": ", f);
@@ -800,7 +795,7 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
                         LSM_SIDE_MAX);
     } else if (wk != w || hk != h) {
       return lsm_fail(err, LSM_ERR_INPUT, src->paths[k], "slice is %dx%d but %s is %dx%d", wk,
-                      hk, base_name(src->paths[0]), w, h);
+                      hk, lsm_base_name(src->paths[0]), w, h);
     }
   }
   /* An aligned gap pads each axis by the largest centroid shift along it (at
@@ -866,7 +861,7 @@ static void name_failed_pair(lsm_err *err, const png_source *src, const lsm_pair
   memcpy(what, err->msg, sizeof what);
   what[sizeof what - 1] = '\0';
   int n = snprintf(err->msg, sizeof err->msg, "%s -> %s (gap %zu of %zu): ", src->paths[pair],
-                   base_name(src->paths[pair + 1]), pair + 1, src->count - 1);
+                   lsm_base_name(src->paths[pair + 1]), pair + 1, src->count - 1);
   if (n > 0 && (size_t)n < sizeof err->msg)
     snprintf(err->msg + n, sizeof err->msg - (size_t)n, "%s; try a smaller --cfl", what);
 }
@@ -1278,13 +1273,13 @@ static int first_by_names(const char *text, char **truth, size_t n_truth, const 
     if (lsm_json_unescape(raw[i], len[i], name) == (size_t)-1) break;
     if (i == 0) {
       for (size_t j = 0; j < n_truth && !found; ++j)
-        if (strcmp(base_name(truth[j]), name) == 0) {
+        if (strcmp(lsm_base_name(truth[j]), name) == 0) {
           found = 1;
           *first = j;
         }
       if (!found) break;
     }
-    if (*first + offsets[i] >= n_truth || strcmp(base_name(truth[*first + offsets[i]]), name) != 0) {
+    if (*first + offsets[i] >= n_truth || strcmp(lsm_base_name(truth[*first + offsets[i]]), name) != 0) {
       found = 0;
       break;
     }
@@ -1540,7 +1535,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
         const lsm_slice_score *p = &per[i];
         while (below + 1 < n_kept && kept[below + 1] < per_at[i]) ++below;
         printf("%s{\"truth\": %zu, \"file\": ", i ? ", " : "", per_at[i] + 1);
-        lsm_json_string(stdout, base_name(truth[per_at[i]]));
+        lsm_json_string(stdout, lsm_base_name(truth[per_at[i]]));
         printf(", \"between\": [%zu, %zu], \"dice\": ", kept[below] + 1, kept[below + 1] + 1);
         lsm_json_number(stdout, p->dice);
         printf(", \"hd95\": ");
