@@ -391,11 +391,18 @@ typedef struct stack_run {
   lsm_grid *image_phi;   /* an input slice's phi in the image frame */
   size_t done, total;
   int gap_workers;       /* gaps run at once (default mode) */
-  /* Scratch of fill_enclosed (width x height cells each), set while a gap
-   * whose two slices have no hole emits its slices; NULL otherwise. */
-  uint8_t *enclosed;
-  int32_t *enclosed_queue;
+  struct pinhole_fill *fill; /* set while a gap whose slices have no hole emits (fill_pinholes) */
 } stack_run;
+
+/* What fill_pinholes needs of a gap: its two slices, scratch of width x
+ * height cells, and the slices' phi in the image frame (computed at the
+ * first pinhole). */
+typedef struct pinhole_fill {
+  const slice *a, *b;
+  uint8_t *cls;
+  int32_t *queue;
+  lsm_grid *phi_a, *phi_b;
+} pinhole_fill;
 
 /* A sample of exactly 0 lies on the surface and counts as inside (phi <= 0,
  * as the masks draw it).  Interpolating half-pixel distances makes such ties
@@ -408,10 +415,10 @@ static void break_zero_ties(float *phi, size_t cells, double pixel_size) {
     if (phi[k] == 0.0f) phi[k] = below;
 }
 
-static void fill_enclosed(stack_run *r);
+static lsm_status fill_pinholes(stack_run *r, lsm_err *err);
 
 static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
-  if (input_index < 0 && r->enclosed) fill_enclosed(r);
+  if (input_index < 0 && r->fill) LSM_TRY(fill_pinholes(r, err));
   break_zero_ties(r->out, (size_t)r->width * (size_t)r->height, r->opts->pixel_size);
   LSM_TRY(r->sink->emit(r->sink->ctx, r->out, r->width, r->height, z, input_index, err));
   r->done++;
@@ -920,6 +927,26 @@ static inline uint8_t cell_class(float phi, float thin) {
   return phi <= 0.0f ? CELL_INSIDE : phi >= thin ? CELL_OPEN : CELL_OUTSIDE;
 }
 
+/* Breadth-first flood over 4-neighbours: from the cells queue[0 .. tail)
+ * (already set to `to`) into every cell of class `from` or `from_too`, each
+ * set to `to` and appended to queue.  Returns the new tail. */
+static size_t flood4(uint8_t *cls, int nx, int ny, int32_t *queue, size_t tail, uint8_t from,
+                     uint8_t from_too, uint8_t to) {
+  for (size_t head = 0; head < tail;) {
+    const int32_t k = queue[head++];
+    const int i = k % nx, j = k / nx;
+    const int ni[4] = {i - 1, i + 1, i, i}, nj[4] = {j, j, j - 1, j + 1};
+    for (int q = 0; q < 4; ++q) {
+      if (ni[q] < 0 || nj[q] < 0 || ni[q] >= nx || nj[q] >= ny) continue;
+      const int32_t m = nj[q] * nx + ni[q];
+      if (cls[m] != from && cls[m] != from_too) continue;
+      cls[m] = to;
+      queue[tail++] = m;
+    }
+  }
+  return tail;
+}
+
 /* The enclosed outside of an nx x ny image of cell classes: the 4-connected
  * components of its outside that neither reach the border nor hold an open
  * cell.  (4-connected: the dual of the 8-connected insides of
@@ -928,7 +955,7 @@ static inline uint8_t cell_class(float phi, float thin) {
  * queue holds nx * ny cells.  Returns the number of cells marked. */
 static size_t mark_enclosed(uint8_t *cls, int nx, int ny, int32_t *queue) {
   const size_t n = (size_t)nx * (size_t)ny;
-  size_t head = 0, tail = 0;
+  size_t tail = 0;
   for (size_t k = 0; k < n; ++k) {
     const int i = (int)(k % (size_t)nx), j = (int)(k / (size_t)nx);
     const int border = i == 0 || j == 0 || i == nx - 1 || j == ny - 1;
@@ -937,18 +964,7 @@ static size_t mark_enclosed(uint8_t *cls, int nx, int ny, int32_t *queue) {
       queue[tail++] = (int32_t)k;
     }
   }
-  while (head < tail) {
-    const int32_t k = queue[head++];
-    const int i = k % nx, j = k / nx;
-    const int ni[4] = {i - 1, i + 1, i, i}, nj[4] = {j, j, j - 1, j + 1};
-    for (int q = 0; q < 4; ++q) {
-      if (ni[q] < 0 || nj[q] < 0 || ni[q] >= nx || nj[q] >= ny) continue;
-      const int32_t m = nj[q] * nx + ni[q];
-      if (cls[m] != CELL_OUTSIDE && cls[m] != CELL_OPEN) continue;
-      cls[m] = CELL_REACHED;
-      queue[tail++] = m;
-    }
-  }
+  flood4(cls, nx, ny, queue, tail, CELL_OUTSIDE, CELL_OPEN, CELL_REACHED);
   size_t marked = 0;
   for (size_t k = 0; k < n; ++k) {
     cls[k] = cls[k] == CELL_OUTSIDE;
@@ -978,43 +994,50 @@ static int mask_has_hole(const lsm_mask *m, uint8_t *cls, int32_t *queue) {
 
 /* Between two slices without holes (run_gap_regular), an output slice's
  * hole of at most PINHOLE_FILL_CELLS pixels, each less than two pixels from
- * the inside, is filled: phi -> -phi there.  Such pinholes are not
- * interpolated from the slices but made by the morph where two parts merge:
- * the outside between them, a ridge of phi, does not sink below zero all at
- * once, and a cell of it left above zero is a hole of one or two pixels (two
- * balls merging, cut every 8th slice: 6 such holes; none with --method
- * blend).  Larger thin holes are left: on the atlas structures most of
- * their pixels are outside in the truth too, a notch whose mouth the morph
- * closed (README, method item 5). */
+ * the inside and inside one of the two slices, is filled: phi -> -phi there,
+ * kept within the two slices' range (item 6 of the README's method).  Such
+ * pinholes are not interpolated from the slices but made by the morph where
+ * two parts merge: the outside between them, a ridge of phi, does not sink
+ * below zero all at once, and a cell of it left above zero is a hole of one
+ * or two pixels (two balls merging, cut every 8th slice: 6 such holes; none
+ * with --method blend).  Larger thin holes are left: on the atlas
+ * structures most of their pixels are outside in the truth too, a notch
+ * whose mouth the morph closed (README, method item 5). */
 #define PINHOLE_FILL_CELLS 4
-static void fill_enclosed(stack_run *r) {
+static lsm_status fill_pinholes(stack_run *r, lsm_err *err) {
+  pinhole_fill *f = r->fill;
   const float thin = (float)(2.0 * r->opts->pixel_size);
   const int nx = r->width, ny = r->height;
   const size_t n = (size_t)nx * (size_t)ny;
-  uint8_t *cls = r->enclosed;
-  int32_t *queue = r->enclosed_queue;
+  uint8_t *cls = f->cls;
+  int32_t *queue = f->queue;
   for (size_t k = 0; k < n; ++k) cls[k] = cell_class(r->out[k], thin);
-  if (mark_enclosed(cls, nx, ny, queue) == 0) return;
+  if (mark_enclosed(cls, nx, ny, queue) == 0) return LSM_OK;
   for (size_t start = 0; start < n; ++start) {
     if (cls[start] != 1) continue;
-    size_t head = 0, tail = 0;
-    cls[start] = 2;
-    queue[tail++] = (int32_t)start;
-    while (head < tail) {
-      const int32_t k = queue[head++];
-      const int i = k % nx, j = k / nx;
-      const int ni[4] = {i - 1, i + 1, i, i}, nj[4] = {j, j, j - 1, j + 1};
-      for (int q = 0; q < 4; ++q) {
-        if (ni[q] < 0 || nj[q] < 0 || ni[q] >= nx || nj[q] >= ny) continue;
-        const int32_t m = nj[q] * nx + ni[q];
-        if (cls[m] != 1) continue;
-        cls[m] = 2;
-        queue[tail++] = m;
-      }
+    cls[start] = 2; /* one hole at a time: its cells 1 -> 2 */
+    queue[0] = (int32_t)start;
+    const size_t tail = flood4(cls, nx, ny, queue, 1, 1, 1, 2);
+    if (tail > PINHOLE_FILL_CELLS) continue;
+    if (!f->phi_a) {
+      const float h = (float)r->opts->pixel_size;
+      LSM_TRY(lsm_grid_create(nx, ny, h, h, &f->phi_a, err));
+      LSM_TRY(lsm_grid_create(nx, ny, h, h, &f->phi_b, err));
+      LSM_TRY(slice_phi(f->a, r->opts->input, 0, 0, f->phi_a, err));
+      LSM_TRY(slice_phi(f->b, r->opts->input, 0, 0, f->phi_b, err));
     }
-    if (tail <= PINHOLE_FILL_CELLS)
-      for (size_t q = 0; q < tail; ++q) r->out[queue[q]] = -r->out[queue[q]];
+    int inside_one = 1;
+    for (size_t q = 0; q < tail && inside_one; ++q) {
+      const int i = queue[q] % nx, j = queue[q] / nx;
+      inside_one = fminf(LSM_AT(f->phi_a, i, j), LSM_AT(f->phi_b, i, j)) < 0.0f;
+    }
+    for (size_t q = 0; q < tail && inside_one; ++q) {
+      const int i = queue[q] % nx, j = queue[q] / nx;
+      const float low = fminf(LSM_AT(f->phi_a, i, j), LSM_AT(f->phi_b, i, j));
+      r->out[queue[q]] = fmaxf(-r->out[queue[q]], low);
+    }
   }
+  return LSM_OK;
 }
 
 /* The pinhole cells of a gap (run_gap_morph): *pinhole[k] = 1 where the cell
@@ -1196,23 +1219,22 @@ static lsm_status run_gap_regular(stack_run *r, const window *w, const double *z
   if (n == 0) return LSM_OK;
   const slice *a = w->s[1], *b = w->s[2];
   const size_t cells = (size_t)r->width * (size_t)r->height;
-  uint8_t *cls = lsm_alloc(cells, 1, err, "hole marks");
-  int32_t *queue = cls ? lsm_alloc(cells, sizeof *queue, err, "hole queue") : NULL;
-  if (!queue) {
-    free(cls);
+  pinhole_fill fill = {a, b, NULL, NULL, NULL, NULL};
+  fill.cls = lsm_alloc(cells, 1, err, "hole marks");
+  fill.queue = fill.cls ? lsm_alloc(cells, sizeof *fill.queue, err, "hole queue") : NULL;
+  if (!fill.queue) {
+    free(fill.cls);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  if (!mask_has_hole(&a->filled, cls, queue) && !mask_has_hole(&b->filled, cls, queue)) {
-    r->enclosed = cls;
-    r->enclosed_queue = queue;
-  }
+  if (!mask_has_hole(&a->filled, fill.cls, fill.queue) &&
+      !mask_has_hole(&b->filled, fill.cls, fill.queue))
+    r->fill = &fill;
   gap g;
   lsm_status st = gap_setup(r, w, &g, err);
   if (st != LSM_OK) {
-    r->enclosed = NULL;
-    r->enclosed_queue = NULL;
-    free(cls);
-    free(queue);
+    r->fill = NULL;
+    free(fill.cls);
+    free(fill.queue);
     return st;
   }
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
@@ -1246,10 +1268,11 @@ static lsm_status run_gap_regular(stack_run *r, const window *w, const double *z
     st = run_gap_morph(r, &g, zs, fs, n, ps, err);
   }
   gap_free(&g);
-  r->enclosed = NULL;
-  r->enclosed_queue = NULL;
-  free(cls);
-  free(queue);
+  r->fill = NULL;
+  lsm_grid_destroy(&fill.phi_a);
+  lsm_grid_destroy(&fill.phi_b);
+  free(fill.cls);
+  free(fill.queue);
   return st;
 }
 

@@ -739,12 +739,21 @@ static void test_merge_no_pinholes(void **state) {
     assert_int_equal(run_stack(&r, SIDE, SIDE, 0, defs, z, N, &o), LSM_OK);
     assert_int_equal(r.sink.n, 57);
     int total = 0;
+    size_t beyond = 0;
     for (size_t k = 0; k < r.sink.n; ++k) {
       const int h = holes(r.sink.s[k].phi, SIDE, SIDE);
       if (h) print_message("merge (%s): %d holes at z = %g\n", lsm_interp_name(o.interp), h, r.sink.s[k].z);
       total += h;
+      /* and the filled cells, as every other, within the range of the
+       * slices around them (gaps between two non-empty slices) */
+      const size_t below = k - k % 8, above = below + 8;
+      if (k % 8 == 0 || defs[below / 8].n == 0 || defs[above / 8].n == 0) continue;
+      const float *pa = r.sink.s[below].phi, *pb = r.sink.s[above].phi, *p = r.sink.s[k].phi;
+      for (int c = 0; c < SIDE * SIDE; ++c)
+        beyond += p[c] < fminf(pa[c], pb[c]) - 1e-4f || p[c] > fmaxf(pa[c], pb[c]) + 1e-4f;
     }
     assert_int_equal(total, 0);
+    assert_int_equal(beyond, 0);
     sink_free(&r.sink);
   }
 }
