@@ -49,9 +49,9 @@ CFLAGS  += -std=c17 $(WARN) $(OPT) -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -
 ifeq ($(MPI),1)
 CFLAGS  += -DLSM_WITH_MPI
 endif
-LDLIBS  += -lpng -lz -lm -lOpenEXRCore -fopenmp -lOpenCL
+LDLIBS  += -lpng -ltiff -lz -lm -lOpenEXRCore -fopenmp -lOpenCL
 
-DEBIAN_PACKAGES := gcc make pkg-config libpng-dev zlib1g-dev libcmocka-dev python3 python3-numpy python3-matplotlib libopenexr-dev python3-vtk9 python3-nibabel openimageio-tools \
+DEBIAN_PACKAGES := gcc make pkg-config libpng-dev libtiff-dev zlib1g-dev libcmocka-dev python3 python3-numpy python3-pil python3-matplotlib libopenexr-dev python3-vtk9 python3-nibabel openimageio-tools \
                    ocl-icd-opencl-dev opencl-headers pocl-opencl-icd libopenmpi-dev openmpi-bin
 DEPS_STAMP := $(BUILD)/.deps-ok
 # Only for validation/end_offsets.py's plain-spline references (make validate).

@@ -81,11 +81,14 @@ static int has_extension(const char *name, const char *ext) {
   return 1;
 }
 
-static int ends_with_png(const char *name) { return has_extension(name, "png"); }
+/* The slice images read: PNG and TIFF. */
+static int slice_image(const char *name) {
+  return has_extension(name, "png") || has_extension(name, "tif") || has_extension(name, "tiff");
+}
 
 /* Other image formats slices often come in (a note counts those left out). */
 static int other_image(const char *name) {
-  static const char *const exts[] = {"tif", "tiff", "jpg", "jpeg", "bmp", "gif", "pgm", "ppm",
+  static const char *const exts[] = {"jpg", "jpeg", "bmp", "gif", "pgm", "ppm",
                                      "pbm", "pnm", "webp", "jp2", "dcm", NULL};
   for (const char *const *e = exts; *e; ++e)
     if (has_extension(name, *e)) return 1;
@@ -98,7 +101,7 @@ void lsm_path_list_free(char **paths, size_t count) {
   free(paths);
 }
 
-lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, size_t *others,
+lsm_status lsm_dir_list_slices(const char *dir, char ***paths, size_t *count, size_t *others,
                             lsm_err *err) {
   if (paths) *paths = NULL;
   if (count) *count = 0;
@@ -127,8 +130,8 @@ lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, size_
       break;
     }
     const char *name = e->d_name;
-    const int png = ends_with_png(name);
-    if (name[0] == '.' || (!png && !(others && other_image(name)))) continue;
+    const int slice = slice_image(name);
+    if (name[0] == '.' || (!slice && !(others && other_image(name)))) continue;
     size_t name_len = strlen(name);
     size_t len = dir_len + (size_t)need_slash + name_len + 1;
     char *path = malloc(len);
@@ -141,7 +144,7 @@ lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, size_
     memcpy(path + dir_len + (size_t)need_slash, name, name_len + 1);
 
     struct stat fs, ls;
-    if (!png) { /* another image format: counted when it is a regular file */
+    if (!slice) { /* another image format: counted when it is a regular file */
       if (stat(path, &fs) == 0 && S_ISREG(fs.st_mode)) ++*others;
       free(path);
       continue;

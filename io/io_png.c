@@ -100,7 +100,7 @@ typedef struct png_reader {
   png_bytepp rows;  /* row pointers into buffer (interlaced only) */
   int palette;      /* 1: rows hold palette indices, mapped through palette_mask */
   int num_palette;
-  uint8_t palette_mask[256]; /* 0/1 of each palette entry (the rule of convert_row) */
+  uint8_t palette_mask[256]; /* 0/1 of each palette entry (the rule of lsm_mask_row_from_samples) */
   lsm_mask mask;
 } png_reader;
 
@@ -108,20 +108,20 @@ static uint32_t sample_at(png_const_bytep p, int wide) {
   return wide ? ((uint32_t)p[0] << 8) | p[1] : p[0];
 }
 
-/* One row of 8- or 16-bit G, GA, RGB or RGBA samples to 0/1.  Foreground when
+/* One row of 8- or 16-bit (big-endian) G, GA, RGB or RGBA samples to 0/1.  Foreground when
  * luminance*alpha/maxval >= maxval/2, 50 % of full scale (or > 0 with
  * nonzero), computed exactly in integers with Rec. 709 weights scaled by
  * 10000.  (For plain gray samples that is 128 of 255; an RGB or composited
  * luminance of 127.9 is past it too.) */
-static void convert_row(png_const_bytep row, png_uint_32 width, int channels, int depth,
-                        int invert, int nonzero, uint8_t *out) {
+void lsm_mask_row_from_samples(const uint8_t *row, uint32_t width, int channels, int depth,
+                               int invert, int nonzero, uint8_t *out) {
   const int wide = depth == 16;
   const size_t step = (size_t)(wide ? 2 : 1);
   const uint64_t maxval = wide ? 65535u : 255u;
   const uint64_t limit = 10000u * maxval * maxval;
   const int has_alpha = channels == 2 || channels == 4;
-  for (png_uint_32 x = 0; x < width; ++x) {
-    png_const_bytep p = row + (size_t)x * (size_t)channels * step;
+  for (uint32_t x = 0; x < width; ++x) {
+    const uint8_t *p = row + (size_t)x * (size_t)channels * step;
     uint64_t lum, alpha = maxval;
     if (channels <= 2) {
       lum = 10000u * (uint64_t)sample_at(p, wide);
@@ -154,7 +154,7 @@ static int convert_index_row(png_reader *r, png_const_bytep row, png_uint_32 y, 
   return 1;
 }
 
-/* Each palette entry, with its tRNS alpha, to 0/1 by convert_row's rule. */
+/* Each palette entry, with its tRNS alpha, to 0/1 by lsm_mask_row_from_samples's rule. */
 static void palette_to_mask(png_reader *r, int invert, int nonzero) {
   png_colorp palette = NULL;
   png_bytep trans = NULL;
@@ -165,7 +165,7 @@ static void palette_to_mask(png_reader *r, int invert, int nonzero) {
   for (int k = 0; k < r->num_palette && k < 256; ++k) {
     const png_byte rgba[4] = {palette[k].red, palette[k].green, palette[k].blue,
                               k < num_trans ? trans[k] : 255};
-    convert_row(rgba, 1, 4, 8, invert, nonzero, &r->palette_mask[k]);
+    lsm_mask_row_from_samples(rgba, 1, 4, 8, invert, nonzero, &r->palette_mask[k]);
   }
 }
 
@@ -248,7 +248,7 @@ static int png_read_guarded(png_reader *r) {
       if (r->palette) {
         if (!convert_index_row(r, r->buffer, y, out)) return 0;
       } else {
-        convert_row(r->buffer, r->width, channels, depth, invert, nonzero, out);
+        lsm_mask_row_from_samples(r->buffer, r->width, channels, depth, invert, nonzero, out);
       }
     }
   } else {
@@ -275,7 +275,7 @@ static int png_read_guarded(png_reader *r) {
       if (r->palette) {
         if (!convert_index_row(r, r->rows[y], y, out)) return 0;
       } else {
-        convert_row(r->rows[y], r->width, channels, depth, invert, nonzero, out);
+        lsm_mask_row_from_samples(r->rows[y], r->width, channels, depth, invert, nonzero, out);
       }
     }
   }

@@ -1,7 +1,8 @@
 /* lsm_io: everything lsmorph reads and writes on disk.
  *
  *   io_png.c      PNG slices in (any bit depth / colour type) and masks out (libpng)
- *   io_dir.c      natural-order listing of the PNG files of a folder
+ *   io_tiff.c     TIFF slices in (libtiff); lsm_slice_read_* pick PNG or TIFF by name
+ *   io_dir.c      natural-order listing of the slice images (PNG, TIFF) of a folder
  *   io_heights.c  the heights text file
  *   io_nrrd.c     streaming NRRD volume writer (attached header, raw float LE)
  *   io_volume.c   streaming writer for every selected volume format at once
@@ -57,6 +58,12 @@ lsm_status lsm_png_read_size(const char *path, int *width, int *height, lsm_err 
 lsm_status lsm_png_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
                                lsm_err *err);
 
+/* One row of 8- or 16-bit G, GA, RGB or RGBA samples (16-bit ones big
+ * endian) to 0/1 by the rule of lsm_png_read_mask (opts' invert and
+ * nonzero); the TIFF reader shares it. */
+void lsm_mask_row_from_samples(const uint8_t *row, uint32_t width, int channels, int depth,
+                               int invert, int nonzero, uint8_t *out);
+
 /* Writes an 8-bit grayscale PNG; pixels are width*height bytes, row-major. */
 lsm_status lsm_png_write_gray8(const char *path, const uint8_t *pixels, int width,
                                int height, lsm_err *err);
@@ -68,17 +75,42 @@ lsm_status lsm_png_write_mask(const char *path, const lsm_mask *mask, lsm_err *e
 lsm_status lsm_png_write_rgb8(const char *path, const uint8_t *pixels, int width,
                               int height, lsm_err *err);
 
+/* ---- TIFF ---------------------------------------------------------------- */
+
+/* Reads a one-page TIFF into a binary mask by the rule of lsm_png_read_mask
+ * (opts as there).  Gray (white or black is zero), gray + alpha, RGB and
+ * RGBA in strips at 1, 8 or 16 bits a sample are read sample for sample, so
+ * 16-bit label masks stored as 0/1 keep their values (opts->nonzero); every
+ * other layout libtiff decodes (palette, YCbCr, tiles, separate planes, 2 or
+ * 4 bits) is read as 8-bit RGBA.  Refused: several pages (one slice a
+ * file), floating-point or signed samples, 16-bit samples outside strips. */
+lsm_status lsm_tiff_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+                              lsm_err *err);
+/* Reads only the size, refusing (LSM_ERR_LIMIT) more than max_pixels pixels
+ * (0 = no limit). */
+lsm_status lsm_tiff_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
+                                lsm_err *err);
+
+/* A slice image by its name: .tif or .tiff (any case) through the TIFF
+ * reader, anything else through the PNG reader. */
+int lsm_is_tiff_name(const char *path);
+lsm_status lsm_slice_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+                               lsm_err *err);
+lsm_status lsm_slice_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
+                                 lsm_err *err);
+
 /* ---- folders -------------------------------------------------------------- */
 
 /* Natural order: digit runs compare by value ("2.png" < "10.png"), the rest
  * byte by byte; ties broken by plain strcmp so the order is total. */
 int lsm_natural_cmp(const char *a, const char *b);
 
-/* Lists the regular files of dir whose name ends in ".png" (any case), in
- * natural order, as full paths "dir/name".  Free with lsm_path_list_free.
- * others (NULL: not counted): the regular files left out whose names end
- * like another image format (.tif, .jpg, .bmp, .pgm, .dcm, ...; not hidden). */
-lsm_status lsm_dir_list_png(const char *dir, char ***paths, size_t *count, size_t *others,
+/* Lists the regular files of dir whose name ends in ".png", ".tif" or
+ * ".tiff" (any case), in natural order, as full paths "dir/name".  Free with
+ * lsm_path_list_free.  others (NULL: not counted): the regular files left out
+ * whose names end like another image format (.jpg, .bmp, .pgm, .dcm, ...;
+ * not hidden). */
+lsm_status lsm_dir_list_slices(const char *dir, char ***paths, size_t *count, size_t *others,
                             lsm_err *err);
 void lsm_path_list_free(char **paths, size_t count);
 

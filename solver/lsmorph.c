@@ -1,5 +1,5 @@
 /* lsmorph: the command-line program.  Parses the command line (lsm_cli), wires
- * PNG slices (io/) into the stack driver (lsm_stack) and its output slices into
+ * PNG or TIFF slices (io/) into the stack driver (lsm_stack) and its output slices into
  * the writers, writes run.json, and publishes OUT_DIR atomically. */
 #define _XOPEN_SOURCE 700
 #include <dirent.h>
@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -129,7 +130,7 @@ static lsm_status stoppable_emit(void *ctx, const float *phi, int width, int hei
   return inner->emit(inner->ctx, phi, width, height, z, input_index, err);
 }
 
-/* ---- input: PNG slices ---------------------------------------------------------------- */
+/* ---- input: PNG or TIFF slices ---------------------------------------------------------------- */
 
 typedef struct png_source {
   char **paths;
@@ -147,7 +148,7 @@ static lsm_status note_dark_labels(const char *path, const lsm_png_read_opts *ro
   lsm_png_read_opts any = *ro;
   any.nonzero = 1;
   lsm_mask m = {0, 0, NULL};
-  LSM_TRY(lsm_png_read_mask(path, &any, &m, err));
+  LSM_TRY(lsm_slice_read_mask(path, &any, &m, err));
   const size_t nonzero = lsm_mask_count(&m), all = (size_t)m.width * (size_t)m.height;
   lsm_mask_free(&m);
   if (nonzero < all && nonzero - bright >= bright)
@@ -173,7 +174,7 @@ static lsm_status pick_foreground(char **paths, size_t count, lsm_png_read_opts 
     ro->nonzero = pass;
     for (size_t k = 0; k < count && !(some_zero && some_nonzero); ++k) {
       lsm_mask m = {0, 0, NULL};
-      LSM_TRY(lsm_png_read_mask(paths[k], ro, &m, err));
+      LSM_TRY(lsm_slice_read_mask(paths[k], ro, &m, err));
       const size_t inside = lsm_mask_count(&m), all = (size_t)m.width * (size_t)m.height;
       lsm_mask_free(&m);
       /* with --invert the mask holds the pixels below 50 %, or the zero ones */
@@ -206,7 +207,7 @@ static void note_filled_outlines(const png_source *src, const char *dir) {
     lsm_mask m = {0, 0, NULL};
     lsm_err ignored;
     lsm_err_clear(&ignored);
-    if (lsm_png_read_mask(src->paths[k], &src->read, &m, &ignored) != LSM_OK) return;
+    if (lsm_slice_read_mask(src->paths[k], &src->read, &m, &ignored) != LSM_OK) return;
     size_t fg = 0, interior = 0;
     for (int j = 0; j < m.height; ++j)
       for (int i = 0; i < m.width; ++i) {
@@ -323,7 +324,7 @@ static void note_heights_beside(const char *dir) {
 static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
   png_source *ps = ctx;
   LSM_TRY(check_stop(err));
-  return lsm_png_read_mask(ps->paths[index], &ps->read, out, err);
+  return lsm_slice_read_mask(ps->paths[index], &ps->read, out, err);
 }
 
 static const char *png_name(void *ctx, size_t index) {
@@ -709,7 +710,7 @@ static int foreign_folder(const char *dir) {
 }
 
 /* Checks made before anything is allocated for the run or written:
- * the output path, the heights, every slice header (PNG signature and IHDR:
+ * the output path, the heights, every slice header (PNG IHDR, TIFF size:
  * all slices the same size), and the resource limits: pixels per slice
  * (--max-pixels), the longest side, the working canvas of an aligned gap and
  * the voxels of the output volume (--max-voxels).  All sizes are computed in
@@ -780,7 +781,7 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
   for (size_t k = 0; k < src->count; ++k) {
     LSM_TRY(check_stop(err));
     int wk = 0, hk = 0;
-    LSM_TRY(lsm_png_read_header(src->paths[k], cli->max_pixels, &wk, &hk, err));
+    LSM_TRY(lsm_slice_read_header(src->paths[k], cli->max_pixels, &wk, &hk, err));
     if (k == 0) {
       w = wk;
       h = hk;
@@ -911,15 +912,15 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   lsm_gap_transport mine = *transport;
   mine.ctx = &counted;
   mine.send = counted_send;
-  lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, NULL, err);
+  lsm_status st = lsm_dir_list_slices(cli->slice_dir, &src.paths, &src.count, NULL, err);
   if (st == LSM_OK && src.count < 2)
-    st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "need at least two PNG slices");
+    st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "need at least two PNG or TIFF slices");
   if (st == LSM_OK && (size_t)transport->rank >= src.count - 1) { /* no gap of its own */
     lsm_path_list_free(src.paths, src.count);
     return LSM_OK;
   }
   if (st == LSM_OK) st = input_heights(cli, src.paths, src.count, &z, err);
-  if (st == LSM_OK) st = lsm_png_read_size(src.paths[0], &width, &height, err);
+  if (st == LSM_OK) st = lsm_slice_read_header(src.paths[0], 0, &width, &height, err);
   if (st == LSM_OK) st = pick_foreground(src.paths, src.count, &src.read, 1, cli->slice_dir, err);
   const int threads = setup_run(cli);
   if (st == LSM_OK) st = lsm_backend_open(cli->backend, cli->device, threads, &backend, err);
@@ -963,13 +964,13 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   memset(&sink, 0, sizeof sink);
   char tmp[4096] = "";
   size_t others = 0;
-  lsm_status st = lsm_dir_list_png(cli->slice_dir, &src.paths, &src.count, &others, err);
+  lsm_status st = lsm_dir_list_slices(cli->slice_dir, &src.paths, &src.count, &others, err);
   if (st == LSM_OK && others && !cli->quiet)
-    fprintf(stderr, "lsmorph: note: %s: %zu image file%s in another format than PNG (.tif, "
-                    ".jpg, ...) left out: slices are read from PNG files only\n",
+    fprintf(stderr, "lsmorph: note: %s: %zu image file%s in another format than PNG or TIFF "
+                    "(.jpg, .bmp, ...) left out: slices are read from PNG and TIFF files only\n",
             cli->slice_dir, others, others == 1 ? "" : "s");
   if (st == LSM_OK && src.count == 0)
-    st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "no PNG files in this folder");
+    st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "no PNG or TIFF files in this folder");
   if (st == LSM_OK && src.count == 1)
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "only one slice: need at least two to fill a gap");
   if (st == LSM_OK) st = input_heights(cli, src.paths, src.count, &z, err);
@@ -1251,10 +1252,20 @@ static int is_dir_with_run_json(const char *dir) {
   return stat(path, &info) == 0 && S_ISREG(info.st_mode);
 }
 
+/* Whether two slice file names name the same slice: equal, or equal but for
+ * a .png / .tif / .tiff extension (a truth kept as TIFF, inputs as PNG). */
+static int same_slice_name(const char *a, const char *b) {
+  if (strcmp(a, b) == 0) return 1;
+  const char *da = strrchr(a, '.'), *db = strrchr(b, '.');
+  if (!da || !db || da - a != db - b || strncmp(a, b, (size_t)(da - a)) != 0) return 0;
+  const int png_a = strcasecmp(da, ".png") == 0, png_b = strcasecmp(db, ".png") == 0;
+  return (png_a || lsm_is_tiff_name(a)) && (png_b || lsm_is_tiff_name(b));
+}
+
 /* The truth slice (0-based) that a result's first input is by the file names
  * of its inputs (run.json's input.files): the truth slice of the first name,
  * when input i is named as truth slice first + offsets[i] is, for every one
- * of the n inputs.  Returns 0 (nothing inferred) otherwise: inputs renamed,
+ * of the n inputs (same_slice_name).  Returns 0 (nothing inferred) otherwise: inputs renamed,
  * from another stack, or a run.json without names. */
 static int first_by_names(const char *text, char **truth, size_t n_truth, const size_t *offsets,
                           size_t n, size_t *first) {
@@ -1273,13 +1284,14 @@ static int first_by_names(const char *text, char **truth, size_t n_truth, const 
     if (lsm_json_unescape(raw[i], len[i], name) == (size_t)-1) break;
     if (i == 0) {
       for (size_t j = 0; j < n_truth && !found; ++j)
-        if (strcmp(lsm_base_name(truth[j]), name) == 0) {
+        if (same_slice_name(lsm_base_name(truth[j]), name)) {
           found = 1;
           *first = j;
         }
       if (!found) break;
     }
-    if (*first + offsets[i] >= n_truth || strcmp(lsm_base_name(truth[*first + offsets[i]]), name) != 0) {
+    if (*first + offsets[i] >= n_truth ||
+        !same_slice_name(lsm_base_name(truth[*first + offsets[i]]), name)) {
       found = 0;
       break;
     }
@@ -1335,7 +1347,7 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
   }
   if (st == LSM_OK && k && n_truth <= first + k) /* nothing held out between two inputs */
     st = lsm_fail(err, LSM_ERR_INPUT, cli->truth_dir,
-                  "%zu PNG files: --stride %zu%s needs at least %zu to hold any out", n_truth, k,
+                  "%zu slice images: --stride %zu%s needs at least %zu to hold any out", n_truth, k,
                   from, first + k + 1);
   if (st == LSM_OK && k) {
     *n_kept = (n_truth - 1 - first) / k + 1;
@@ -1383,7 +1395,7 @@ static lsm_status check_stdout(lsm_err *err) {
 static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   char **truth = NULL;
   size_t n = 0, *kept = NULL, n_kept = 0;
-  LSM_TRY(lsm_dir_list_png(cli->truth_dir, &truth, &n, NULL, err));
+  LSM_TRY(lsm_dir_list_slices(cli->truth_dir, &truth, &n, NULL, err));
   size_t inputs = 0; /* run.json's input count, with --stride */
   char from[64] = ""; /* where --stride starts, when not at the first slice */
   lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, err);
@@ -1421,7 +1433,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
       st = lsm_fail(err, LSM_ERR_INPUT, dir,
                     "no such folder: score reads the result's slices (a reconstruct run with "
                     "--no-slices has none)");
-    if (st == LSM_OK) st = lsm_dir_list_png(dir, &result, &m, NULL, err);
+    if (st == LSM_OK) st = lsm_dir_list_slices(dir, &result, &m, NULL, err);
     lsm_path_list_free(result, m);
     if (st == LSM_OK && m != last - first + 1 && cli->stride)
       st = lsm_fail(err, LSM_ERR_INPUT, dir,
@@ -1444,8 +1456,8 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
     char path[4200];
     snprintf(path, sizeof path, "%s/slices/%05zu.png", cli->result_dir, k - first + 1);
     lsm_mask a = {0}, b = {0};
-    st = lsm_png_read_mask(path, &ro, &a, err);
-    if (st == LSM_OK) st = lsm_png_read_mask(truth[k], &ro_truth, &b, err);
+    st = lsm_slice_read_mask(path, &ro, &a, err);
+    if (st == LSM_OK) st = lsm_slice_read_mask(truth[k], &ro_truth, &b, err);
     if (st == LSM_OK && (a.width != b.width || a.height != b.height))
       st = lsm_fail(err, LSM_ERR_INPUT, path, "slice is %dx%d but the truth slice %s is %dx%d",
                     a.width, a.height, truth[k], b.width, b.height);

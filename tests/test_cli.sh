@@ -462,15 +462,39 @@ check "--seed with pls: no note" sh -c "! grep -q 'has no effect' '$TMP/e'"
 # image files of another format in the slice folder are left out, with a note counting them
 mkdir -p "$TMP/with-tif"
 cp "$TMP/unit-end/"*.png "$TMP/with-tif/"
-printf 'x' >"$TMP/with-tif/4.tif"
+printf 'x' >"$TMP/with-tif/4.bmp"
 printf 'x' >"$TMP/with-tif/5.JPG"
 printf 'x' >"$TMP/with-tif/notes.txt"
 "$LSM" reconstruct "$TMP/with-tif" -o "$TMP/out-with-tif" --spacing 8 --no-preview >"$TMP/o" 2>"$TMP/e"
 rc=$?
-check "a folder with .tif and .jpg files besides the PNGs exits 0 (got $rc)" [ $rc -eq 0 ]
-check "a note counts the 2 image files of another format" grep -q "with-tif: 2 image files in another format than PNG" "$TMP/e"
+check "a folder with .bmp and .jpg files besides the PNGs exits 0 (got $rc)" [ $rc -eq 0 ]
+check "a note counts the 2 image files of another format" grep -q "with-tif: 2 image files in another format than PNG or TIFF" "$TMP/e"
 "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-no-tif" --spacing 8 --no-preview >"$TMP/o" 2>"$TMP/e"
 check "PNG slices only: no such note" sh -c "! grep -q 'another format than PNG' '$TMP/e'"
+# TIFF slices (Pillow writes them): 8-bit LZW, 1-bit CCITT G4, 16-bit 0/1 labels, and PNG
+# and TIFF mixed, each give the PNG stack's volume byte for byte
+/usr/bin/python3 - "$TMP/unit-end" "$TMP" <<'PY'
+import glob, os, sys
+import numpy as np
+from PIL import Image
+src, tmp = sys.argv[1], sys.argv[2]
+for kind in ("tiff8", "tiff1", "tiff16", "mixed"):
+    os.makedirs(os.path.join(tmp, kind), exist_ok=True)
+for i, path in enumerate(sorted(glob.glob(os.path.join(src, "*.png")))):
+    a = np.array(Image.open(path).convert("L"))
+    name = os.path.basename(path)[:-4]
+    Image.fromarray(a).save(os.path.join(tmp, "tiff8", name + ".tif"), compression="tiff_lzw")
+    Image.fromarray(a >= 128).save(os.path.join(tmp, "tiff1", name + ".TIFF"), compression="group4")
+    Image.fromarray((a >= 128).astype(np.uint16)).save(os.path.join(tmp, "tiff16", name + ".tif"))
+    Image.fromarray(a).save(os.path.join(tmp, "mixed", name + (".tif" if i % 2 else ".png")))
+PY
+for kind in tiff8 tiff1 tiff16 mixed; do
+  "$LSM" reconstruct "$TMP/$kind" -o "$TMP/out-$kind" --spacing 8 --no-preview >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "$kind slices exit 0 (got $rc: $(head -c 200 "$TMP/e"))" [ $rc -eq 0 ]
+  check "$kind slices give the PNG stack's volume" cmp -s "$TMP/out-$kind/volume.nrrd" "$TMP/out-no-tif/volume.nrrd"
+  [ $kind = tiff16 ] && check "16-bit 0/1 label TIFFs: the note on label masks" grep -q "(label masks stored as 0/1)" "$TMP/e"
+done
 
 # The same command into an existing OUT replaces it.
 "$LSM" reconstruct "$SET" -o "$OUT" --input outline --heights "$SET/heights.txt" --dz 40 -q \
@@ -551,7 +575,7 @@ ABS_LSM=$(cd "$(dirname "$LSM")" && pwd)/$(basename "$LSM")
 rc=$?
 check "reconstruct -- -dash exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 (cd "$TMP" && "$ABS_LSM" score --stride 2 -- -dash out-dash) >"$TMP/o" 2>"$TMP/e"
-check "score --stride 2 -- -dash OUT reads -dash as the truth folder" grep -q -- "-dash: 2 PNG files" "$TMP/e"
+check "score --stride 2 -- -dash OUT reads -dash as the truth folder" grep -q -- "-dash: 2 slice images" "$TMP/e"
 # --seed takes any 64-bit unsigned value
 "$LSM" reconstruct "$NAT" -o "$TMP/out-seed" --input outline --spacing 4 --method pls \
   --seed 18446744073709551615 --no-preview -q >"$TMP/o" 2>"$TMP/e"

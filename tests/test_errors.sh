@@ -101,9 +101,9 @@ make_pngs
 # ---- folders -------------------------------------------------------------------------------
 expect "missing folder" 1 "nope: no such folder" out reconstruct nope -o out -q
 mkdir empty
-expect "empty folder" 1 "empty: no PNG files" out reconstruct empty -o out -q
+expect "empty folder" 1 "empty: no PNG or TIFF files" out reconstruct empty -o out -q
 mkdir textonly && echo "not slices" >textonly/notes.txt
-expect "folder without PNG files" 1 "textonly: no PNG files" out reconstruct textonly -o out -q
+expect "folder without PNG files" 1 "textonly: no PNG or TIFF files" out reconstruct textonly -o out -q
 echo "a file" >afile
 expect "SLICE_DIR is a file" 1 "afile: not a folder" out reconstruct afile -o out -q
 mkdir one && cp good/1.png one/
@@ -136,6 +136,26 @@ else
 fi
 
 expect "slices of different sizes" 1 "sizes/3.png: slice is 40x40 but 1.png is 32x32" out reconstruct sizes -o out -q
+
+# ---- TIFF slices that cannot be read: each the second of two slices -----------------------------
+mkdir t-text t-cut t-pages t-float
+for d in t-text t-cut t-pages t-float; do cp good/1.png "$d/1.png"; done
+printf 'not a tiff' >t-text/2.tif
+/usr/bin/python3 - <<'PY'
+import numpy as np
+from PIL import Image
+a = np.zeros((32, 32), np.uint8)
+a[8:24, 8:24] = 255
+Image.fromarray(a).save("t-cut/2.tif", compression="tiff_lzw")
+data = open("t-cut/2.tif", "rb").read()
+open("t-cut/2.tif", "wb").write(data[: len(data) // 2])
+Image.fromarray(a).save("t-pages/2.tif", save_all=True, append_images=[Image.fromarray(a)])
+Image.fromarray(a.astype(np.float32)).save("t-float/2.tif")
+PY
+expect "TIFF: not a TIFF" 1 "t-text/2.tif: cannot read as TIFF" out reconstruct t-text -o out -q
+expect "TIFF: cut in half" 1 "t-cut/2.tif: " out reconstruct t-cut -o out -q
+expect "TIFF: two pages" 1 "t-pages/2.tif: TIFF with several pages: give one slice a file" out reconstruct t-pages -o out -q
+expect "TIFF: float samples" 1 "t-float/2.tif: TIFF samples are floating point" out reconstruct t-float -o out -q
 
 # ---- resource limits ----------------------------------------------------------------------------
 # A valid signature and IHDR of 200000 x 200000 pixels (CRC right) and nothing else:
@@ -253,8 +273,8 @@ else
 fi
 
 # ---- score ----------------------------------------------------------------------------------------------
-expect "score: no truth slices" 1 "empty: 0 PNG files: --stride 2 needs at least 3" - score empty ref --stride 2
-expect "score: nothing held out" 1 "good: 3 PNG files: --stride 3 needs at least 4" - score good ref --stride 3
+expect "score: no truth slices" 1 "empty: 0 slice images: --stride 2 needs at least 3" - score empty ref --stride 2
+expect "score: nothing held out" 1 "good: 3 slice images: --stride 3 needs at least 4" - score good ref --stride 3
 expect "score: missing result" 1 "nothing/slices: no such folder" - score good nothing --stride 2
 expect "score: a result without slices/ (--no-slices)" 1 "empty/slices: no such folder: score reads the result's slices (a reconstruct run with --no-slices has none)" - score good empty --stride 2
 expect "score: bad --stride" 2 "--stride: 1 is out of range" - score good ref --stride 1
@@ -350,6 +370,18 @@ if [ $rc -eq 0 ] && cmp -s "$TMP/stdout" "$TMP/stdout2" && cmp -s "$TMP/stdout" 
 else
   bad "score of slices 2, 4, 6, 8 kept under their names, no --first: exit $rc: $(cat "$TMP/stdout2" "$TMP/stdout3" "$TMP/stderr")"
 fi
+# the same truth kept as TIFF (tall's PNGs as .tif): the names match but for the extension
+mkdir -p tall-tif && /usr/bin/python3 -c 'import glob, os, sys
+from PIL import Image
+for f in glob.glob("tall/*.png"): Image.open(f).save("tall-tif/" + os.path.basename(f)[:-4] + ".tif")'
+"$LSM" score tall-tif r-even >"$TMP/stdout4" 2>"$TMP/stderr"
+rc=$?
+if [ $rc -eq 0 ] && cmp -s "$TMP/stdout" "$TMP/stdout4" &&
+  grep -q -F "lsmorph: note: the inputs are named as truth slices 2, 4, 6, ... of tall-tif" "$TMP/stderr"; then
+  ok
+else
+  bad "score of PNG inputs against a TIFF truth, no --first: exit $rc: $(cat "$TMP/stdout4" "$TMP/stderr")"
+fi
 expect "score: an offset result taken from slice 1" 1 \
   "r-even/slices/00001.png: differs from the truth slice tall/1.png, which run.json's input heights make an input, the first input taken as truth slice 1 (--first N if it is slice N)" - \
   score tall r-even --first 1
@@ -367,7 +399,7 @@ expect "score: renamed inputs" 1 \
 expect "score: an offset result from the wrong --first" 1 \
   "r-even/slices/00001.png: differs from the truth slice tall/3.png, which run.json's input heights make an input, the first input taken as truth slice 3" - \
   score tall r-even --first 3
-expect "score: --stride from a late --first" 1 "tall: 9 PNG files: --stride 2 from slice 8 needs at least 10" - \
+expect "score: --stride from a late --first" 1 "tall: 9 slice images: --stride 2 from slice 8 needs at least 10" - \
   score tall r-even --stride 2 --first 8
 expect "score: bad --first" 2 "--first: 0 is out of range" - score tall r4 --first 0
 expect "score: no --stride and no run.json" 2 \

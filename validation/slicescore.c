@@ -68,8 +68,8 @@ static lsm_status score_line(const char *id, const char *result, const char *tru
   lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0};
   lsm_mask a = {0, 0, NULL}, b = {0, 0, NULL};
   lsm_slice_score s;
-  lsm_status st = lsm_png_read_mask(result, &ro, &a, err);
-  if (st == LSM_OK) st = lsm_png_read_mask(truth, &ro, &b, err);
+  lsm_status st = lsm_slice_read_mask(result, &ro, &a, err);
+  if (st == LSM_OK) st = lsm_slice_read_mask(truth, &ro, &b, err);
   if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, NULL, NULL, NULL, err);
   size_t *stack = NULL;
   uint8_t *seen = NULL;

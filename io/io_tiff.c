@@ -1,0 +1,292 @@
+/* io_tiff: TIFF slices in (libtiff), by the PNG reader's foreground rule.
+ *
+ * Two paths.  Strips of gray, gray + alpha, RGB or RGBA at 1, 8 or 16 bits a
+ * sample, top-left oriented, are read scanline by scanline and each row goes
+ * through lsm_mask_row_from_samples as a PNG row would (16-bit samples put
+ * big endian first), so a 16-bit label mask stored as 0/1 keeps its values.
+ * Every other layout libtiff can decode (palette, YCbCr, CMYK, tiles,
+ * separate planes, 2 or 4 bits, other orientations) is read through its RGBA
+ * interface: 8 bits a sample, alpha premultiplied, so the colour is already
+ * composited over black and the alpha is dropped.
+ *
+ * libtiff's messages go to a handler per file (TIFFOpenExt), never to
+ * stderr: the first error becomes the message of the failure.
+ */
+#include "lsm_io.h"
+
+#include <ctype.h>
+#include <inttypes.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <tiffio.h>
+
+/* The largest single allocation libtiff may make for one file: a strip as
+ * large as the largest image the pixel limit lets through. */
+#define TIFF_MAX_ALLOC ((tmsize_t)1 << 31)
+
+typedef struct tiff_messages {
+  char first[200]; /* libtiff's first error, "" if none */
+} tiff_messages;
+
+static int on_tiff_error(TIFF *tif, void *user, const char *module, const char *fmt, va_list ap) {
+  (void)tif;
+  (void)module;
+  tiff_messages *m = user;
+  if (m && !m->first[0]) vsnprintf(m->first, sizeof m->first, fmt, ap);
+  return 1; /* handled: not to stderr */
+}
+
+static int on_tiff_warning(TIFF *tif, void *user, const char *module, const char *fmt,
+                           va_list ap) {
+  (void)tif, (void)user, (void)module, (void)fmt, (void)ap;
+  return 1; /* unknown tags and the like mean nothing to a mask */
+}
+
+static lsm_status tiff_open(const char *path, tiff_messages *msgs, TIFF **out, lsm_err *err) {
+  *out = NULL;
+  msgs->first[0] = '\0';
+  TIFFOpenOptions *o = TIFFOpenOptionsAlloc();
+  if (!o) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate libtiff's options");
+  TIFFOpenOptionsSetErrorHandlerExtR(o, on_tiff_error, msgs);
+  TIFFOpenOptionsSetWarningHandlerExtR(o, on_tiff_warning, msgs);
+  TIFFOpenOptionsSetMaxSingleMemAlloc(o, TIFF_MAX_ALLOC);
+  TIFF *tif = TIFFOpenExt(path, "r", o);
+  TIFFOpenOptionsFree(o);
+  if (!tif)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "cannot read as TIFF: %s",
+                    msgs->first[0] ? msgs->first : "not a TIFF file");
+  *out = tif;
+  return LSM_OK;
+}
+
+/* Size and page count; refuses several pages and images over max_pixels. */
+static lsm_status tiff_size(TIFF *tif, const char *path, uint64_t max_pixels, uint32_t *w,
+                            uint32_t *h, lsm_err *err) {
+  *w = *h = 0;
+  if (!TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, w) || !TIFFGetField(tif, TIFFTAG_IMAGELENGTH, h) ||
+      *w == 0 || *h == 0)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "corrupt TIFF: no image size");
+  if (*w > INT32_MAX || *h > INT32_MAX)
+    return lsm_fail(err, LSM_ERR_LIMIT, path, "image is %" PRIu32 "x%" PRIu32 ", too large", *w,
+                    *h);
+  const uint64_t pixels = (uint64_t)*w * (uint64_t)*h;
+  if (max_pixels != 0 && pixels > max_pixels)
+    return lsm_fail(err, LSM_ERR_LIMIT, path,
+                    "image is %" PRIu32 "x%" PRIu32 " = %" PRIu64
+                    " pixels, more than the limit of %" PRIu64,
+                    *w, *h, pixels, max_pixels);
+  if (!TIFFLastDirectory(tif))
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "TIFF with several pages: give one slice a file (tiffsplit from "
+                    "libtiff-tools splits a stack)");
+  return LSM_OK;
+}
+
+lsm_status lsm_tiff_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
+                                lsm_err *err) {
+  if (width) *width = 0;
+  if (height) *height = 0;
+  if (!path || !width || !height)
+    return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to read a TIFF header");
+  tiff_messages msgs;
+  TIFF *tif;
+  LSM_TRY(tiff_open(path, &msgs, &tif, err));
+  uint32_t w, h;
+  lsm_status st = tiff_size(tif, path, max_pixels, &w, &h, err);
+  TIFFClose(tif);
+  if (st == LSM_OK) {
+    *width = (int)w;
+    *height = (int)h;
+  }
+  return st;
+}
+
+/* How a strip image's samples map to a PNG-like row: the channels kept
+ * (gray or RGB, then an unassociated alpha), each sample's index in the
+ * pixel, and whether gray is stored with white as zero. */
+typedef struct strip_layout {
+  int channels;   /* 1 to 4, as lsm_mask_row_from_samples takes them */
+  int source[4];  /* sample index of each kept channel */
+  int spp;        /* samples per pixel in the file */
+  int bits;       /* 1, 8 or 16 */
+  int white_zero; /* PHOTOMETRIC_MINISWHITE */
+} strip_layout;
+
+/* Whether the image can be read by scanlines, and how (else RGBA). */
+static int strip_layout_of(TIFF *tif, strip_layout *l) {
+  uint16_t bits = 1, spp = 1, photometric = 0, planar = PLANARCONFIG_CONTIG;
+  uint16_t orientation = ORIENTATION_TOPLEFT, extra_count = 0;
+  uint16_t *extra = NULL;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bits);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLESPERPIXEL, &spp);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_PLANARCONFIG, &planar);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_ORIENTATION, &orientation);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_EXTRASAMPLES, &extra_count, &extra);
+  if (!TIFFGetField(tif, TIFFTAG_PHOTOMETRIC, &photometric)) return 0;
+  if (TIFFIsTiled(tif) || planar != PLANARCONFIG_CONTIG || orientation != ORIENTATION_TOPLEFT)
+    return 0;
+  const int gray = photometric == PHOTOMETRIC_MINISBLACK || photometric == PHOTOMETRIC_MINISWHITE;
+  const int colour = gray ? 1 : photometric == PHOTOMETRIC_RGB ? 3 : 0;
+  if (!colour || spp < colour || spp > 4 || spp - colour != extra_count) return 0;
+  if (!(bits == 8 || bits == 16 || (bits == 1 && spp == 1))) return 0;
+  memset(l, 0, sizeof *l);
+  l->channels = colour;
+  for (int c = 0; c < colour; ++c) l->source[c] = c;
+  /* an unassociated alpha is composited as PNG's is; an associated one is
+   * already in the colour, and an unspecified extra sample is no alpha */
+  for (int e = 0; e < extra_count; ++e)
+    if (extra && extra[e] == EXTRASAMPLE_UNASSALPHA && l->channels == colour) {
+      l->source[l->channels] = colour + e;
+      l->channels++;
+    }
+  l->spp = spp;
+  l->bits = bits;
+  l->white_zero = photometric == PHOTOMETRIC_MINISWHITE;
+  return 1;
+}
+
+/* The kept samples of one scanline as a PNG-like row: 8-bit (1-bit samples
+ * to 0 / 255) or 16-bit big endian. */
+static void strip_row(const strip_layout *l, const uint8_t *line, uint32_t width, uint8_t *row) {
+  const int wide = l->bits == 16;
+  for (uint32_t x = 0; x < width; ++x)
+    for (int c = 0; c < l->channels; ++c) {
+      const size_t s = (size_t)x * (size_t)l->spp + (size_t)l->source[c];
+      uint32_t v, maxval = wide ? 65535u : 255u;
+      if (l->bits == 1)
+        v = ((line[s >> 3] >> (7 - (s & 7))) & 1u) ? 255u : 0u;
+      else if (wide) {
+        uint16_t u;
+        memcpy(&u, line + 2 * s, 2); /* libtiff gives host order */
+        v = u;
+      } else
+        v = line[s];
+      if (l->white_zero && c == 0) v = maxval - v;
+      uint8_t *o = row + ((size_t)x * (size_t)l->channels + (size_t)c) * (wide ? 2 : 1);
+      if (wide) {
+        o[0] = (uint8_t)(v >> 8);
+        o[1] = (uint8_t)(v & 0xffu);
+      } else {
+        o[0] = (uint8_t)v;
+      }
+    }
+}
+
+/* Refuses samples that are not unsigned integers, and 16-bit samples that
+ * only the RGBA path could read (it would scale 0/1 labels to 0). */
+static lsm_status check_samples(TIFF *tif, const char *path, int strips, lsm_err *err) {
+  uint16_t format = SAMPLEFORMAT_UINT, bits = 1;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLEFORMAT, &format);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bits);
+  if (format != SAMPLEFORMAT_UINT)
+    return lsm_fail(err, LSM_ERR_UNSUPPORTED, path,
+                    "TIFF samples are %s, not unsigned integers: save the mask as 8-bit gray",
+                    format == SAMPLEFORMAT_IEEEFP ? "floating point" : "signed or complex");
+  if (!strips && bits > 8)
+    return lsm_fail(err, LSM_ERR_UNSUPPORTED, path,
+                    "%u-bit TIFF in tiles, separate planes or this colour model is not read: "
+                    "save it as gray in strips, or at 8 bits",
+                    (unsigned)bits);
+  return LSM_OK;
+}
+
+static lsm_status read_strips(TIFF *tif, const char *path, const strip_layout *l, uint32_t w,
+                              uint32_t h, int invert, int nonzero, lsm_mask *mask,
+                              tiff_messages *msgs, lsm_err *err) {
+  const tmsize_t line_bytes = TIFFScanlineSize(tif);
+  const size_t need = ((size_t)w * (size_t)l->spp * (size_t)l->bits + 7) / 8;
+  if (line_bytes <= 0 || (size_t)line_bytes < need)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "corrupt TIFF: scanline of %" PRId64 " bytes",
+                    (int64_t)line_bytes);
+  const int depth = l->bits == 16 ? 16 : 8;
+  uint8_t *line = malloc((size_t)line_bytes);
+  uint8_t *row = malloc((size_t)w * (size_t)l->channels * (size_t)(depth / 8));
+  lsm_status st = LSM_OK;
+  if (!line || !row) st = lsm_fail(err, LSM_ERR_NOMEM, path, "out of memory for a row");
+  for (uint32_t y = 0; st == LSM_OK && y < h; ++y) {
+    if (TIFFReadScanline(tif, line, y, 0) < 0) {
+      st = lsm_fail(err, LSM_ERR_INPUT, path, "corrupt TIFF: %s",
+                    msgs->first[0] ? msgs->first : "cannot read a scanline");
+      break;
+    }
+    strip_row(l, line, w, row);
+    lsm_mask_row_from_samples(row, w, l->channels, depth, invert, nonzero,
+                              mask->pixels + (size_t)y * (size_t)w);
+  }
+  free(line);
+  free(row);
+  return st;
+}
+
+static lsm_status read_rgba(TIFF *tif, const char *path, uint32_t w, uint32_t h, int invert,
+                            int nonzero, lsm_mask *mask, tiff_messages *msgs, lsm_err *err) {
+  size_t pixels;
+  if (!lsm_size_mul(w, h, &pixels) || pixels > SIZE_MAX / 4)
+    return lsm_fail(err, LSM_ERR_LIMIT, path, "image too large");
+  uint32_t *raster = malloc(pixels * sizeof *raster);
+  uint8_t *row = malloc((size_t)w * 3);
+  lsm_status st = LSM_OK;
+  if (!raster || !row) st = lsm_fail(err, LSM_ERR_NOMEM, path, "out of memory for the image");
+  if (st == LSM_OK && !TIFFReadRGBAImageOriented(tif, w, h, raster, ORIENTATION_TOPLEFT, 0))
+    st = lsm_fail(err, LSM_ERR_INPUT, path, "cannot decode the TIFF: %s",
+                  msgs->first[0] ? msgs->first : "unsupported layout");
+  for (uint32_t y = 0; st == LSM_OK && y < h; ++y) {
+    const uint32_t *p = raster + (size_t)y * (size_t)w;
+    for (uint32_t x = 0; x < w; ++x) { /* premultiplied: over black already */
+      row[3 * (size_t)x + 0] = (uint8_t)TIFFGetR(p[x]);
+      row[3 * (size_t)x + 1] = (uint8_t)TIFFGetG(p[x]);
+      row[3 * (size_t)x + 2] = (uint8_t)TIFFGetB(p[x]);
+    }
+    lsm_mask_row_from_samples(row, w, 3, 8, invert, nonzero, mask->pixels + (size_t)y * (size_t)w);
+  }
+  free(raster);
+  free(row);
+  return st;
+}
+
+lsm_status lsm_tiff_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+                              lsm_err *err) {
+  if (out) memset(out, 0, sizeof *out);
+  if (!path || !out) return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to read a TIFF");
+  tiff_messages msgs;
+  TIFF *tif;
+  LSM_TRY(tiff_open(path, &msgs, &tif, err));
+  uint32_t w = 0, h = 0;
+  strip_layout layout;
+  lsm_status st = tiff_size(tif, path, opts ? opts->max_pixels : 0, &w, &h, err);
+  const int strips = st == LSM_OK && strip_layout_of(tif, &layout);
+  if (st == LSM_OK) st = check_samples(tif, path, strips, err);
+  if (st == LSM_OK) st = lsm_mask_create((int)w, (int)h, out, err);
+  const int invert = opts ? opts->invert : 0, nonzero = opts ? opts->nonzero : 0;
+  if (st == LSM_OK)
+    st = strips ? read_strips(tif, path, &layout, w, h, invert, nonzero, out, &msgs, err)
+                : read_rgba(tif, path, w, h, invert, nonzero, out, &msgs, err);
+  TIFFClose(tif);
+  if (st != LSM_OK) lsm_mask_free(out);
+  return st;
+}
+
+/* ---- slice images by name ------------------------------------------------------------ */
+
+int lsm_is_tiff_name(const char *path) {
+  const char *dot = path ? strrchr(path, '.') : NULL;
+  if (!dot || strchr(dot, '/')) return 0;
+  char ext[6] = {0};
+  size_t n = strlen(dot + 1);
+  if (n < 3 || n > 4) return 0;
+  for (size_t k = 0; k < n; ++k) ext[k] = (char)tolower((unsigned char)dot[1 + k]);
+  return strcmp(ext, "tif") == 0 || strcmp(ext, "tiff") == 0;
+}
+
+lsm_status lsm_slice_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+                               lsm_err *err) {
+  return lsm_is_tiff_name(path) ? lsm_tiff_read_mask(path, opts, out, err)
+                                : lsm_png_read_mask(path, opts, out, err);
+}
+
+lsm_status lsm_slice_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
+                                 lsm_err *err) {
+  return lsm_is_tiff_name(path) ? lsm_tiff_read_header(path, max_pixels, width, height, err)
+                                : lsm_png_read_header(path, max_pixels, width, height, err);
+}
