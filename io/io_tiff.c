@@ -9,8 +9,10 @@
  * interface: 8 bits a sample, alpha premultiplied, so the colour is already
  * composited over black and the alpha is dropped.
  *
- * libtiff's messages go to a handler per file (TIFFOpenExt), never to
- * stderr: the first error becomes the message of the failure.
+ * libtiff opens files itself (mapped) and streams through a FILE *
+ * (TIFFClientOpenExt: memory for the fuzzer); its messages go to a handler
+ * per file, never to stderr: the first error becomes the message of the
+ * failure.
  */
 #include "lsm_io.h"
 
@@ -43,18 +45,63 @@ static int on_tiff_warning(TIFF *tif, void *user, const char *module, const char
   return 1; /* unknown tags and the like mean nothing to a mask */
 }
 
-static lsm_status tiff_open(const char *path, tiff_messages *msgs, TIFF **out, lsm_err *err) {
-  *out = NULL;
+/* libtiff's I/O on a FILE * (a file, or fmemopen() memory), read only; the
+ * stream is not closed here. */
+static tmsize_t fp_read(thandle_t h, void *buf, tmsize_t n) {
+  return n < 0 ? -1 : (tmsize_t)fread(buf, 1, (size_t)n, (FILE *)h);
+}
+static tmsize_t fp_write(thandle_t h, void *buf, tmsize_t n) {
+  (void)h, (void)buf, (void)n;
+  return -1;
+}
+static toff_t fp_seek(thandle_t h, toff_t off, int whence) {
+  if (off > (toff_t)INT64_MAX || fseeko((FILE *)h, (off_t)off, whence) != 0) return (toff_t)-1;
+  const off_t at = ftello((FILE *)h);
+  return at < 0 ? (toff_t)-1 : (toff_t)at;
+}
+static int fp_close(thandle_t h) {
+  (void)h;
+  return 0;
+}
+static toff_t fp_size(thandle_t h) {
+  FILE *fp = h;
+  const off_t at = ftello(fp);
+  if (at < 0 || fseeko(fp, 0, SEEK_END) != 0) return 0;
+  const off_t end = ftello(fp);
+  if (fseeko(fp, at, SEEK_SET) != 0 || end < 0) return 0;
+  return (toff_t)end;
+}
+static int fp_map(thandle_t h, void **base, toff_t *size) {
+  (void)h, (void)base, (void)size;
+  return 0; /* no mapping: libtiff reads */
+}
+static void fp_unmap(thandle_t h, void *base, toff_t size) { (void)h, (void)base, (void)size; }
+
+/* libtiff's options for one file: its messages to msgs, allocations capped. */
+static TIFFOpenOptions *open_options(tiff_messages *msgs) {
   msgs->first[0] = '\0';
   TIFFOpenOptions *o = TIFFOpenOptionsAlloc();
-  if (!o) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate libtiff's options");
+  if (!o) return NULL;
   TIFFOpenOptionsSetErrorHandlerExtR(o, on_tiff_error, msgs);
   TIFFOpenOptionsSetWarningHandlerExtR(o, on_tiff_warning, msgs);
   TIFFOpenOptionsSetMaxSingleMemAlloc(o, TIFF_MAX_ALLOC);
-  TIFF *tif = TIFFOpenExt(path, "r", o);
+  return o;
+}
+
+/* Opens a file by name (libtiff maps it: its reads without a mapping refuse
+ * small tiles, 16 x 16 at 8 bits: "Invalid tile byte count"), or, with path NULL,
+ * the stream fp under name. */
+static lsm_status tiff_open(const char *path, FILE *fp, const char *name, tiff_messages *msgs,
+                            TIFF **out, lsm_err *err) {
+  *out = NULL;
+  TIFFOpenOptions *o = open_options(msgs);
+  if (!o) return lsm_fail(err, LSM_ERR_NOMEM, name, "cannot allocate libtiff's options");
+  TIFF *tif = path ? TIFFOpenExt(path, "r", o)
+                   : TIFFClientOpenExt(name, "rm", (thandle_t)fp, fp_read, fp_write, fp_seek,
+                                       fp_close, fp_size, fp_map, fp_unmap, o);
   TIFFOpenOptionsFree(o);
   if (!tif)
-    return lsm_fail(err, LSM_ERR_INPUT, path, "cannot read as TIFF: %s",
+    return lsm_fail(err, LSM_ERR_INPUT, name, "cannot read as TIFF: %s",
                     msgs->first[0] ? msgs->first : "not a TIFF file");
   *out = tif;
   return LSM_OK;
@@ -91,7 +138,7 @@ lsm_status lsm_tiff_read_header(const char *path, uint64_t max_pixels, int *widt
     return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to read a TIFF header");
   tiff_messages msgs;
   TIFF *tif;
-  LSM_TRY(tiff_open(path, &msgs, &tif, err));
+  LSM_TRY(tiff_open(path, NULL, path, &msgs, &tif, err));
   uint32_t w, h;
   lsm_status st = tiff_size(tif, path, max_pixels, &w, &h, err);
   TIFFClose(tif);
@@ -245,26 +292,43 @@ static lsm_status read_rgba(TIFF *tif, const char *path, uint32_t w, uint32_t h,
   return st;
 }
 
+/* The mask of an open TIFF (closed here). */
+static lsm_status read_mask(TIFF *tif, const char *name, const lsm_png_read_opts *opts,
+                            tiff_messages *msgs, lsm_mask *out, lsm_err *err) {
+  uint32_t w = 0, h = 0;
+  strip_layout layout;
+  lsm_status st = tiff_size(tif, name, opts ? opts->max_pixels : 0, &w, &h, err);
+  const int strips = st == LSM_OK && strip_layout_of(tif, &layout);
+  if (st == LSM_OK) st = check_samples(tif, name, strips, err);
+  if (st == LSM_OK) st = lsm_mask_create((int)w, (int)h, out, err);
+  const int invert = opts ? opts->invert : 0, nonzero = opts ? opts->nonzero : 0;
+  if (st == LSM_OK)
+    st = strips ? read_strips(tif, name, &layout, w, h, invert, nonzero, out, msgs, err)
+                : read_rgba(tif, name, w, h, invert, nonzero, out, msgs, err);
+  TIFFClose(tif);
+  if (st != LSM_OK) lsm_mask_free(out);
+  return st;
+}
+
 lsm_status lsm_tiff_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
                               lsm_err *err) {
   if (out) memset(out, 0, sizeof *out);
   if (!path || !out) return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to read a TIFF");
   tiff_messages msgs;
   TIFF *tif;
-  LSM_TRY(tiff_open(path, &msgs, &tif, err));
-  uint32_t w = 0, h = 0;
-  strip_layout layout;
-  lsm_status st = tiff_size(tif, path, opts ? opts->max_pixels : 0, &w, &h, err);
-  const int strips = st == LSM_OK && strip_layout_of(tif, &layout);
-  if (st == LSM_OK) st = check_samples(tif, path, strips, err);
-  if (st == LSM_OK) st = lsm_mask_create((int)w, (int)h, out, err);
-  const int invert = opts ? opts->invert : 0, nonzero = opts ? opts->nonzero : 0;
-  if (st == LSM_OK)
-    st = strips ? read_strips(tif, path, &layout, w, h, invert, nonzero, out, &msgs, err)
-                : read_rgba(tif, path, w, h, invert, nonzero, out, &msgs, err);
-  TIFFClose(tif);
-  if (st != LSM_OK) lsm_mask_free(out);
-  return st;
+  LSM_TRY(tiff_open(path, NULL, path, &msgs, &tif, err));
+  return read_mask(tif, path, opts, &msgs, out, err);
+}
+
+lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+                                     lsm_mask *out, lsm_err *err) {
+  if (out) memset(out, 0, sizeof *out);
+  if (!fp || !name || !out)
+    return lsm_fail(err, LSM_ERR_INTERNAL, name, "bad arguments to read a TIFF");
+  tiff_messages msgs;
+  TIFF *tif;
+  LSM_TRY(tiff_open(NULL, fp, name, &msgs, &tif, err));
+  return read_mask(tif, name, opts, &msgs, out, err);
 }
 
 /* ---- slice images by name ------------------------------------------------------------ */

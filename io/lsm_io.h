@@ -86,6 +86,13 @@ lsm_status lsm_png_write_rgb8(const char *path, const uint8_t *pixels, int width
  * file), floating-point or signed samples, 16-bit samples outside strips. */
 lsm_status lsm_tiff_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
                               lsm_err *err);
+/* The same from an open, seekable stream positioned at the TIFF header
+ * (fmemopen() memory: the fuzzer uses it); name is used in messages.  The
+ * stream is read but not closed.  libtiff reads a stream without mapping it,
+ * and then refuses small tiles (16 x 16 at 8 bits: "Invalid tile byte
+ * count"), which it reads from a file. */
+lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+                                     lsm_mask *out, lsm_err *err);
 /* Reads only the size, refusing (LSM_ERR_LIMIT) more than max_pixels pixels
  * (0 = no limit). */
 lsm_status lsm_tiff_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
