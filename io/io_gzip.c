@@ -12,9 +12,13 @@
  *   gzip trailer (CRC-32 of all uncompressed bytes, their count mod 2^32)
  *
  * One member, plain RFC 1951/1952: every gzip reader reads it.  The head sits
- * at byte LSM_GZIP_HEAD_OFFSET; finish writes the new head there and the
- * trailer with the CRC of the new head combined with the CRC of the rest
- * (zlib's crc32_combine), so the rest is never read back.
+ * at byte LSM_GZIP_HEAD_OFFSET of the member; finish writes the new head there
+ * and the trailer with the CRC of the new head combined with the CRC of the
+ * rest (zlib's crc32_combine), so the rest is never read back.
+ *
+ * volume.nrrd with encoding gzip is the other way round: its header is plain
+ * text before the member (a prefix, rewritten in place at the end too) and
+ * the member holds the samples only (no head).
  */
 #include "lsm_io.h"
 
@@ -30,6 +34,7 @@ struct lsm_gzip_writer {
   FILE *fp;
   z_stream z;
   int z_ready;             /* deflateInit2 succeeded: deflateEnd is owed */
+  size_t prefix_bytes;     /* plain bytes before the gzip member */
   size_t head_bytes;
   uLong crc_rest;          /* CRC-32 of the bytes after the head */
   uint64_t rest_bytes;
@@ -58,10 +63,12 @@ static lsm_status pump(lsm_gzip_writer *g, int flush, lsm_err *err) {
   }
 }
 
-lsm_status lsm_gzip_writer_open(const char *path, const unsigned char *head, size_t head_bytes,
+lsm_status lsm_gzip_writer_open(const char *path, const unsigned char *prefix,
+                                size_t prefix_bytes, const unsigned char *head, size_t head_bytes,
                                 int level, lsm_gzip_writer **out, lsm_err *err) {
   if (out) *out = NULL;
-  if (!path || !out || (!head && head_bytes) || head_bytes > 65535 || level < 0 || level > 9)
+  if (!path || !out || (!head && head_bytes) || (!prefix && prefix_bytes) || head_bytes > 65535 ||
+      level < 0 || level > 9)
     return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to the gzip writer");
   lsm_gzip_writer *g = calloc(1, sizeof *g);
   if (!g) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate the gzip writer");
@@ -72,6 +79,7 @@ lsm_status lsm_gzip_writer_open(const char *path, const unsigned char *head, siz
     return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate the gzip writer");
   }
   memcpy(g->path, path, len + 1);
+  g->prefix_bytes = prefix_bytes;
   g->head_bytes = head_bytes;
   g->crc_rest = crc32(0L, Z_NULL, 0);
   lsm_status st = LSM_OK;
@@ -91,7 +99,8 @@ lsm_status lsm_gzip_writer_open(const char *path, const unsigned char *head, siz
         0x00,                                /* stored block, not the last */
         (unsigned char)(n & 0xffu), (unsigned char)(n >> 8),
         (unsigned char)(~n & 0xffu), (unsigned char)((~n >> 8) & 0xffu)};
-    if (fwrite(lead, 1, sizeof lead, g->fp) != sizeof lead ||
+    if ((prefix_bytes && fwrite(prefix, 1, prefix_bytes, g->fp) != prefix_bytes) ||
+        fwrite(lead, 1, sizeof lead, g->fp) != sizeof lead ||
         (head_bytes && fwrite(head, 1, head_bytes, g->fp) != head_bytes))
       st = write_fail(g, err);
   }
@@ -122,11 +131,11 @@ lsm_status lsm_gzip_writer_write(lsm_gzip_writer *g, const void *data, size_t by
   return LSM_OK;
 }
 
-lsm_status lsm_gzip_writer_finish(lsm_gzip_writer **gp, const unsigned char *head,
-                                  lsm_err *err) {
+lsm_status lsm_gzip_writer_finish(lsm_gzip_writer **gp, const unsigned char *prefix,
+                                  const unsigned char *head, lsm_err *err) {
   if (!gp || !*gp) return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "gzip writer is not open");
   lsm_gzip_writer *g = *gp;
-  if (!head && g->head_bytes) {
+  if ((!head && g->head_bytes) || (!prefix && g->prefix_bytes)) {
     lsm_gzip_writer_abort(gp);
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "bad arguments to finish a gzip file");
   }
@@ -143,8 +152,11 @@ lsm_status lsm_gzip_writer_finish(lsm_gzip_writer **gp, const unsigned char *hea
     if (fwrite(trailer, 1, sizeof trailer, g->fp) != sizeof trailer) st = write_fail(g, err);
   }
   if (st == LSM_OK && g->head_bytes &&
-      (fseek(g->fp, LSM_GZIP_HEAD_OFFSET, SEEK_SET) != 0 ||
+      (fseek(g->fp, (long)(g->prefix_bytes + LSM_GZIP_HEAD_OFFSET), SEEK_SET) != 0 ||
        fwrite(head, 1, g->head_bytes, g->fp) != g->head_bytes))
+    st = write_fail(g, err);
+  if (st == LSM_OK && g->prefix_bytes &&
+      (fseek(g->fp, 0, SEEK_SET) != 0 || fwrite(prefix, 1, g->prefix_bytes, g->fp) != g->prefix_bytes))
     st = write_fail(g, err);
   st = lsm_close_written(&g->fp, g->path, st, err);
   lsm_gzip_writer_abort(gp);

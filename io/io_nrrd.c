@@ -26,7 +26,7 @@ struct lsm_nrrd_writer {
   int failed;         /* a write failed: finish refuses */
 };
 
-size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size_t nz,
+size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int gzip, int nx, int ny, size_t nz,
                        double sx, double sy, double sz, double ox, double oy, double oz) {
   char body[LSM_NRRD_HEADER_BYTES + 1];
   if (cap < LSM_NRRD_HEADER_BYTES + 1) return 0;
@@ -46,9 +46,10 @@ size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size
                      "space origin: (%s,%s,%s)\n"
                      "kinds: domain domain domain\n"
                      "%s"
-                     "encoding: raw\n",
+                     "encoding: %s\n",
                      is_float ? "" : ": mask, 255 inside, 0 outside", is_float ? "float" : "uchar",
-                     nx, ny, nz, t[0], t[1], t[2], t[3], t[4], t[5], is_float ? "endian: little\n" : "");
+                     nx, ny, nz, t[0], t[1], t[2], t[3], t[4], t[5], is_float ? "endian: little\n" : "",
+                     gzip ? "gzip" : "raw");
   /* then "# " + dots + "\n" + "\n" (the blank line that ends the header) */
   if (len < 0 || (size_t)len + 4 > LSM_NRRD_HEADER_BYTES) return 0;
   size_t pad = LSM_NRRD_HEADER_BYTES - (size_t)len - 4;
@@ -67,7 +68,7 @@ size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size
 /* The float header of this writer. */
 static int nrrd_header(char out[LSM_NRRD_HEADER_BYTES + 1], const lsm_nrrd_writer *w, size_t nz,
                        double sz) {
-  return lsm_nrrd_header(out, LSM_NRRD_HEADER_BYTES + 1, 1, w->nx, w->ny, nz, w->sx, w->sy, sz,
+  return lsm_nrrd_header(out, LSM_NRRD_HEADER_BYTES + 1, 1, 0, w->nx, w->ny, nz, w->sx, w->sy, sz,
                          w->ox, w->oy, w->oz) != 0;
 }
 

@@ -1,7 +1,10 @@
 /* io_volume: one streaming writer for every selected volume format.
  *
  *   nrrd  volume.nrrd  float: io_nrrd.c as before; mask: a uchar NRRD with the
- *                      same fixed 512-byte header layout (written here)
+ *                      same fixed 512-byte header layout (written here); with
+ *                      --nrrd-encoding gzip (LSM_FORMAT_NRRD_GZ) either one is
+ *                      the header, then the samples as one gzip member
+ *                      (io_gzip.c, the header a rewritable prefix)
  *   mha   volume.mha   MetaImage header (io_mha.c) + samples, little endian
  *   vtk   volume.vtk   legacy VTK header (io_vtk.c) + samples, big endian
  *   raw   volume.raw   samples only, little endian; volume.json at the end
@@ -87,12 +90,14 @@ lsm_status lsm_format_list_parse(const char *list, unsigned *formats, lsm_err *e
 static const struct {
   unsigned bit;
   const char *file;
-} files[] = {{LSM_FORMAT_NRRD, "volume.nrrd"}, {LSM_FORMAT_MHA, "volume.mha"},
+} files[] = {{LSM_FORMAT_NRRD, "volume.nrrd"}, {LSM_FORMAT_NRRD_GZ, "volume.nrrd"},
+             {LSM_FORMAT_MHA, "volume.mha"},
              {LSM_FORMAT_VTK, "volume.vtk"},   {LSM_FORMAT_NII, "volume.nii"},
              {LSM_FORMAT_NII_GZ, "volume.nii.gz"}, {LSM_FORMAT_RAW, "volume.raw"},
              {LSM_FORMAT_RAW, "volume.json"},  {LSM_FORMAT_EXR, "exr/"}};
 
-/* The sample file of a stream format (one of nrrd, mha, vtk, nii, nii.gz, raw). */
+/* The sample file of a stream format (one of nrrd, mha, vtk, nii, nii.gz, raw;
+ * nrrd with gzip). */
 static const char *stream_file_name(unsigned format) {
   for (size_t k = 0; k < sizeof files / sizeof files[0]; ++k)
     if (files[k].bit == format) return files[k].file;
@@ -118,11 +123,11 @@ void lsm_volume_geometry_text(const lsm_volume_info *info, char spacing[3][32],
   }
 }
 
-/* ---- the NRRD header for mask volumes (uchar): io_nrrd.c builds it ---------------------- */
+/* ---- the NRRD header of a stream (a uchar mask, or gzip): io_nrrd.c builds it -------------- */
 
-static size_t nrrd_u8_header(char *out, size_t cap, const lsm_volume_info *v) {
-  return lsm_nrrd_header(out, cap, 0, v->nx, v->ny, v->nz, v->sx, v->sy, v->sz, v->ox, v->oy,
-                         v->oz);
+static size_t nrrd_stream_header(char *out, size_t cap, const lsm_volume_info *v, int gzip) {
+  return lsm_nrrd_header(out, cap, v->values == LSM_VALUES_SDF, gzip, v->nx, v->ny, v->nz, v->sx,
+                         v->sy, v->sz, v->ox, v->oy, v->oz);
 }
 
 /* ---- the writer ------------------------------------------------------------------------- */
@@ -136,14 +141,14 @@ typedef struct vol_stream {
   size_t header_bytes;   /* fixed header length (0: raw) */
   sample_enc enc;
   lsm_nrrd_writer *nrrd; /* float NRRD goes through io_nrrd.c */
-  lsm_gzip_writer *gz;   /* volume.nii.gz goes through io_gzip.c */
+  lsm_gzip_writer *gz;   /* volume.nii.gz and gzip NRRD go through io_gzip.c */
 } vol_stream;
 
 struct lsm_volume_writer {
   char *dir;
   unsigned formats;
   lsm_volume_info info;
-  vol_stream streams[6];
+  vol_stream streams[7];
   int nstreams;
   size_t samples;                 /* nx * ny */
   unsigned char *buf[ENC_COUNT];  /* one converted slice per encoding in use */
@@ -171,7 +176,8 @@ static char *join_path(const char *dir, const char *name) {
 static size_t stream_header(const vol_stream *s, const lsm_volume_info *info, char *out,
                             size_t cap) {
   switch (s->format) {
-  case LSM_FORMAT_NRRD: return nrrd_u8_header(out, cap, info);
+  case LSM_FORMAT_NRRD: return nrrd_stream_header(out, cap, info, 0);
+  case LSM_FORMAT_NRRD_GZ: return nrrd_stream_header(out, cap, info, 1);
   case LSM_FORMAT_MHA: return lsm_mha_header(out, cap, info);
   case LSM_FORMAT_VTK: return lsm_vtk_header(out, cap, info);
   case LSM_FORMAT_NII:
@@ -181,8 +187,9 @@ static size_t stream_header(const vol_stream *s, const lsm_volume_info *info, ch
 }
 
 #define HEADER_CAP 2048
-/* zlib level of volume.nii.gz: 1, as nibabel writes; see README (speed and size) */
-#define NII_GZ_LEVEL 1
+/* zlib level of volume.nii.gz and of a gzip volume.nrrd: 1, as nibabel
+ * writes; see README (speed and size) */
+#define GZIP_LEVEL 1
 
 static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *err) {
   vol_stream *s = &w->streams[w->nstreams];
@@ -205,8 +212,11 @@ static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *er
       return lsm_fail(err, LSM_ERR_INTERNAL, s->path, "header does not fit in %d bytes", HEADER_CAP);
   }
   if (format == LSM_FORMAT_NII_GZ)
-    return lsm_gzip_writer_open(s->path, (const unsigned char *)header, s->header_bytes,
-                                NII_GZ_LEVEL, &s->gz, err);
+    return lsm_gzip_writer_open(s->path, NULL, 0, (const unsigned char *)header, s->header_bytes,
+                                GZIP_LEVEL, &s->gz, err);
+  if (format == LSM_FORMAT_NRRD_GZ)
+    return lsm_gzip_writer_open(s->path, (const unsigned char *)header, s->header_bytes, NULL, 0,
+                                GZIP_LEVEL, &s->gz, err);
   s->fp = fopen(s->path, "wb");
   if (!s->fp) return lsm_fail(err, LSM_ERR_IO, s->path, "cannot create: %s", strerror(errno));
   if (s->header_bytes && fwrite(header, 1, s->header_bytes, s->fp) != s->header_bytes)
@@ -219,7 +229,8 @@ lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values 
                                   double oz, lsm_volume_writer **out, lsm_err *err) {
   if (out) *out = NULL;
   if (!dir || !out) return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad arguments to the volume writer");
-  if (formats == 0 || (formats & ~LSM_FORMAT_ALL))
+  if (formats == 0 || (formats & ~(LSM_FORMAT_ALL | LSM_FORMAT_NRRD_GZ)) ||
+      ((formats & LSM_FORMAT_NRRD) && (formats & LSM_FORMAT_NRRD_GZ)))
     return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad format set 0x%x", formats);
   if (values != LSM_VALUES_SDF && values != LSM_VALUES_MASK)
     return lsm_fail(err, LSM_ERR_INTERNAL, dir, "bad value kind %d", (int)values);
@@ -254,8 +265,9 @@ lsm_status lsm_volume_writer_open(const char *dir, unsigned formats, lsm_values 
   v->values = values;
 
   lsm_status st = LSM_OK;
-  static const unsigned order[] = {LSM_FORMAT_NRRD, LSM_FORMAT_MHA, LSM_FORMAT_VTK,
-                                   LSM_FORMAT_NII, LSM_FORMAT_NII_GZ, LSM_FORMAT_RAW};
+  static const unsigned order[] = {LSM_FORMAT_NRRD, LSM_FORMAT_NRRD_GZ, LSM_FORMAT_MHA,
+                                   LSM_FORMAT_VTK,  LSM_FORMAT_NII,     LSM_FORMAT_NII_GZ,
+                                   LSM_FORMAT_RAW};
   for (size_t k = 0; st == LSM_OK && k < sizeof order / sizeof order[0]; ++k)
     if (formats & order[k]) st = stream_open(w, order[k], err);
   for (int k = 0; st == LSM_OK && k < w->nstreams; ++k) {
@@ -370,8 +382,10 @@ static lsm_status stream_finish(vol_stream *s, const lsm_volume_info *info, lsm_
     if (len != s->header_bytes)
       st = lsm_fail(err, LSM_ERR_INTERNAL, s->path, "header length changed (%zu, was %zu bytes)",
                     len, s->header_bytes);
+    else if (s->gz && s->format == LSM_FORMAT_NRRD_GZ)
+      st = lsm_gzip_writer_finish(&s->gz, (const unsigned char *)header, NULL, err);
     else if (s->gz)
-      st = lsm_gzip_writer_finish(&s->gz, (const unsigned char *)header, err);
+      st = lsm_gzip_writer_finish(&s->gz, NULL, (const unsigned char *)header, err);
     else if (fseek(s->fp, 0, SEEK_SET) != 0 || fwrite(header, 1, len, s->fp) != len)
       st = lsm_fail(err, LSM_ERR_IO, s->path, "write failed: %s", strerror(errno));
   }

@@ -164,10 +164,11 @@ lsm_status lsm_nrrd_open(const char *path, int nx, int ny, double sx, double sy,
  * difference between the provisional and the final header. */
 #define LSM_NRRD_HEADER_BYTES 512
 
-/* Builds the fixed-length NRRD header (and a NUL) into out: raw float32
- * little endian (is_float) or uchar, sizes nx ny nz, space directions and
- * origin.  Returns LSM_NRRD_HEADER_BYTES, or 0 if cap is too small. */
-size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int nx, int ny, size_t nz,
+/* Builds the fixed-length NRRD header (and a NUL) into out: float32 little
+ * endian (is_float) or uchar, encoding raw or gzip, sizes nx ny nz, space
+ * directions and origin.  Returns LSM_NRRD_HEADER_BYTES, or 0 if cap is too
+ * small. */
+size_t lsm_nrrd_header(char *out, size_t cap, int is_float, int gzip, int nx, int ny, size_t nz,
                        double sx, double sy, double sz, double ox, double oy, double oz);
 
 /* Checks the geometry every volume writer needs: positive slice size whose
@@ -213,7 +214,10 @@ lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t
 #define LSM_FORMAT_RAW 0x10u  /* volume.raw + volume.json sidecar, little endian */
 #define LSM_FORMAT_NII 0x20u  /* volume.nii: NIfTI-1 single file, little endian */
 #define LSM_FORMAT_NII_GZ 0x40u /* volume.nii.gz: the same, gzip compressed */
-#define LSM_FORMAT_ALL 0x7fu
+#define LSM_FORMAT_ALL 0x7fu  /* the formats --format names */
+/* volume.nrrd with encoding gzip (--nrrd-encoding gzip): in place of
+ * LSM_FORMAT_NRRD in a writer's set, never with it; not a --format name. */
+#define LSM_FORMAT_NRRD_GZ 0x80u
 #define LSM_FORMATS_NIFTI (LSM_FORMAT_NII | LSM_FORMAT_NII_GZ) /* 16-bit sizes */
 
 /* What the volume holds: the signed distance (float32, physical units,
@@ -278,22 +282,25 @@ size_t lsm_nifti_header(unsigned char *out, size_t cap, const lsm_volume_info *i
 
 /* A gzip file (RFC 1952, one member) written as a stream, whose first
  * head_bytes uncompressed bytes (at most 65535) are kept in a stored deflate
- * block at byte LSM_GZIP_HEAD_OFFSET of the file, so that finish can replace
- * them with a head of the same length (volume.nii.gz's header, with the slice
- * count known only at the end); the rest is deflated at level (0..9).  Memory:
- * zlib's state and a 64 KiB buffer. */
+ * block at byte LSM_GZIP_HEAD_OFFSET of the member, so that finish can
+ * replace them with a head of the same length (volume.nii.gz's header, with
+ * the slice count known only at the end); the rest is deflated at level
+ * (0..9).  prefix_bytes plain bytes come before the member, replaced at the
+ * end the same way (volume.nrrd's text header with encoding gzip; 0 for a
+ * plain gzip file).  Memory: zlib's state and a 64 KiB buffer. */
 #define LSM_GZIP_HEAD_OFFSET 15
 typedef struct lsm_gzip_writer lsm_gzip_writer;
-lsm_status lsm_gzip_writer_open(const char *path, const unsigned char *head, size_t head_bytes,
+lsm_status lsm_gzip_writer_open(const char *path, const unsigned char *prefix,
+                                size_t prefix_bytes, const unsigned char *head, size_t head_bytes,
                                 int level, lsm_gzip_writer **out, lsm_err *err);
 /* Compresses and appends bytes after the head. */
 lsm_status lsm_gzip_writer_write(lsm_gzip_writer *g, const void *data, size_t bytes,
                                  lsm_err *err);
-/* Ends the deflate stream, writes the trailer, puts head (head_bytes long, as
- * at open) in place of the provisional one, closes the file (checking every
- * write and the close) and frees the writer. */
-lsm_status lsm_gzip_writer_finish(lsm_gzip_writer **g, const unsigned char *head,
-                                  lsm_err *err);
+/* Ends the deflate stream, writes the trailer, puts prefix and head (as long
+ * as at open; NULL where that was 0) in place of the provisional ones, closes
+ * the file (checking every write and the close) and frees the writer. */
+lsm_status lsm_gzip_writer_finish(lsm_gzip_writer **g, const unsigned char *prefix,
+                                  const unsigned char *head, lsm_err *err);
 /* Closes and frees without finishing (after an error); harmless on NULL. */
 void lsm_gzip_writer_abort(lsm_gzip_writer **g);
 

@@ -94,6 +94,9 @@ static const char reconstruct_help_output[] =
     "                         slice), raw (+ volume.json)\n"
     "  --values sdf|mask      sdf: float32 signed distance (default); mask: uint8,\n"
     "                         255 inside, 0 outside (EXR: half 1.0 / 0.0)\n"
+    "  --nrrd-encoding raw|gzip  volume.nrrd's samples as they are (default) or as\n"
+    "                         one gzip stream (NRRD's standard encoding gzip, as 3D\n"
+    "                         Slicer writes it; masks shrink most)\n"
     "  --mesh                 also write surface.ply, a closed triangle mesh of the\n"
     "                         surface phi = 0\n"
     "  --no-preview           do not write preview.png and preview3d.png\n"
@@ -465,6 +468,12 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       NEEDS_VALUE();
       if ((cli->values = lsm_values_from_name(v)) == LSM_VALUES_UNKNOWN)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--values: '%s' is not one of sdf, mask", v);
+    } else if (IS("--nrrd-encoding")) {
+      NEEDS_VALUE();
+      if (strcmp(v, "raw") != 0 && strcmp(v, "gzip") != 0)
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--nrrd-encoding: '%s' is not one of raw, gzip", v);
+      cli->nrrd_gzip = strcmp(v, "gzip") == 0;
+      cli->nrrd_encoding_given = 1;
     } else if (IS("--mesh")) {
       cli->mesh = 1;
     } else if (IS("--no-preview")) {

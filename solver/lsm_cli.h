@@ -38,6 +38,8 @@ typedef struct lsm_cli {
   int device;                /* --device N (-1: first GPU, else first device) */
   unsigned formats;          /* --format: set of LSM_FORMAT_* bits (io/lsm_io.h) */
   int values;                /* --values: LSM_VALUES_SDF or LSM_VALUES_MASK */
+  int nrrd_gzip;             /* --nrrd-encoding gzip (0: raw) */
+  int nrrd_encoding_given;
   int mesh;                  /* --mesh: write surface.ply */
   int preview;               /* preview.png and preview3d.png (--no-preview: 0) */
   lsm_stack_opts stack;

@@ -512,9 +512,9 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
     lsm_json_string(f, lsm_format_name(bit));
   }
   const lsm_pls_opts *pls = &o->morph.pls;
-  fprintf(f, "], \"mesh\": %s, \"preview\": %s, \"particles_per_cell\": %d, \"pls_reseed\": %d, "
+  fprintf(f, "], \"nrrd_encoding\": \"%s\", \"mesh\": %s, \"preview\": %s, \"particles_per_cell\": %d, \"pls_reseed\": %d, "
           "\"pls_radius_adjust\": %s, \"seed\": %" PRIu64 "},\n",
-          cli->mesh ? "true" : "false", cli->preview ? "true" : "false", pls->particles_per_cell,
+          cli->nrrd_gzip ? "gzip" : "raw", cli->mesh ? "true" : "false", cli->preview ? "true" : "false", pls->particles_per_cell,
           pls->reseed_every, pls->radius_adjust ? "true" : "false", pls->seed);
   fputs("  \"input\": {\"folder\": ", f);
   lsm_json_string(f, cli->slice_dir);
@@ -1008,6 +1008,8 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
                       "each pair of that mode)\n");
     if (cli->backend == LSM_BACKEND_C && cli->device_given)
       fprintf(stderr, "lsmorph: note: --device has no effect with --backend c\n");
+    if (cli->nrrd_encoding_given && !(cli->formats & LSM_FORMAT_NRRD))
+      fprintf(stderr, "lsmorph: note: --nrrd-encoding has no effect without nrrd in --format\n");
     if (cli->stack.method != LSM_METHOD_BLEND && cli->stack.morph.cfl > 1.0)
       fprintf(stderr, "lsmorph: note: --cfl %g is above 1, where the schemes are no longer "
                       "monotone: thin parts may oscillate or blow up (a blow-up stops the run "
@@ -1040,8 +1042,12 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     sink.input = cli->slice_dir;
     const double pixel = cli->stack.pixel_size;
     const double dz = lsm_stack_output_dz(&cli->stack);
-    st = lsm_volume_writer_open(tmp, cli->formats, (lsm_values)cli->values, width, height, pixel,
-                                pixel, dz, 0.0, 0.0, z[0], &sink.volume, err);
+    /* --nrrd-encoding gzip: the writer's gzip NRRD in place of the raw one */
+    const unsigned formats = cli->nrrd_gzip && (cli->formats & LSM_FORMAT_NRRD)
+                                 ? (cli->formats & ~LSM_FORMAT_NRRD) | LSM_FORMAT_NRRD_GZ
+                                 : cli->formats;
+    st = lsm_volume_writer_open(tmp, formats, (lsm_values)cli->values, width, height, pixel, pixel,
+                                dz, 0.0, 0.0, z[0], &sink.volume, err);
     /* the mesh caps an object cut by the first or last slice half a slice step
      * beyond it: dz, or with --per-iteration (uneven heights, --dz unused) the
      * step to the neighbouring slice */

@@ -312,7 +312,7 @@ check "--per-iteration exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "--per-iteration: run.json says \"evenly_spaced\": false" grep -q '"evenly_spaced": false' "$TMP/out-iter/run.json"
 check "--per-iteration: a note says the slices are not evenly spaced" grep -q "note: the output slices are not evenly spaced" "$TMP/e"
 check "outline pyramid: no note that it looks filled" sh -c "! grep -q 'looks filled' '$TMP/e'"
-for field in '"values": "sdf"' '"formats": ["nrrd"]' '"mesh": false' '"preview": false' \
+for field in '"values": "sdf"' '"formats": ["nrrd"]' '"nrrd_encoding": "raw"' '"mesh": false' '"preview": false' \
   '"particles_per_cell": 16' '"pls_reseed": 0' '"pls_radius_adjust": false' '"seed": '; do
   check "run.json options record $field" grep -qF "$field" "$TMP/out-iter/run.json"
 done
@@ -430,8 +430,9 @@ check "--ends halfway: the same volume without empty slices" cmp -s "$OUT/volume
 rc=$?
 check "--interp linear --ends halfway exits 0 (got $rc)" [ $rc -eq 0 ]
 check "--interp linear --ends halfway: no note about --ends" sh -c "! grep -q 'ends tip|auto have no effect' '$TMP/e'"
+check "no --nrrd-encoding: no note about it" sh -c "! grep -q 'nrrd-encoding' '$TMP/e'"
 "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-lin-tip" --spacing 8 --interp linear \
-  --ends tip --format raw --no-preview --tol 0.1 --seed 7 --device 1 >"$TMP/o" 2>"$TMP/e"
+  --ends tip --format raw --no-preview --tol 0.1 --seed 7 --device 1 --nrrd-encoding gzip >"$TMP/o" 2>"$TMP/e"
 rc=$?
 check "--interp linear --ends tip exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "--interp linear --ends tip: a note says --ends has no effect" grep -q "note: --interp linear ends an object at mid-gap: --ends tip|auto have no effect" "$TMP/e"
@@ -440,6 +441,8 @@ check "--interp linear: --ends tip gives the same volume as halfway" cmp -s "$TM
 check "--tol without --per-iteration: a note" grep -q "note: --tol has no effect without --per-iteration" "$TMP/e"
 check "--seed with ls: a note" grep -q "note: --seed has no effect without --method pls" "$TMP/e"
 check "--device with the C backend: a note" grep -q "note: --device has no effect with --backend c" "$TMP/e"
+check "--nrrd-encoding without nrrd: a note" grep -q "note: --nrrd-encoding has no effect without nrrd in --format" "$TMP/e"
+check "--nrrd-encoding gzip: run.json records it" grep -q '"nrrd_encoding": "gzip"' "$TMP/out-lin-tip/run.json"
 check "--cfl at its default: no note about monotonicity" sh -c "! grep -q 'is above 1' '$TMP/e'"
 "$LSM" reconstruct "$TMP/unit-end" -o "$TMP/out-cfl" --spacing 8 --cfl 1.2 --format raw \
   --no-preview >"$TMP/o" 2>"$TMP/e"

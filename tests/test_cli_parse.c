@@ -29,19 +29,29 @@ static void test_reconstruct_defaults(void **state) {
   assert_true(cli.stack.tol == 0.25);
   assert_int_equal(cli.heights_from_names, 0);
   assert_int_equal(cli.spacing_given, 0);
+  assert_int_equal(cli.nrrd_gzip, 0);
+  assert_int_equal(cli.nrrd_encoding_given, 0);
 }
 
 static void test_long_forms(void **state) {
   (void)state;
   char *argv[] = {"lsmorph", "reconstruct", "in", "--output=out", "--device=2", "--quiet",
-                  "--max-iter", "7"};
+                  "--max-iter", "7", "--nrrd-encoding=gzip"};
   lsm_cli cli;
   lsm_err err;
-  assert_int_equal(parse(&cli, &err, 8, argv), LSM_OK);
+  assert_int_equal(parse(&cli, &err, 9, argv), LSM_OK);
   assert_string_equal(cli.out_dir, "out");
   assert_int_equal(cli.device, 2);
   assert_int_equal(cli.quiet, 1);
   assert_int_equal(cli.stack.max_iter, 7);
+  assert_int_equal(cli.nrrd_gzip, 1);
+  assert_int_equal(cli.nrrd_encoding_given, 1);
+  char *raw[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--nrrd-encoding", "raw"};
+  assert_int_equal(parse(&cli, &err, 7, raw), LSM_OK);
+  assert_int_equal(cli.nrrd_gzip, 0);
+  char *bad[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--nrrd-encoding", "bzip2"};
+  assert_int_equal(parse(&cli, &err, 7, bad), LSM_ERR_USAGE);
+  assert_non_null(strstr(err.msg, "--nrrd-encoding: 'bzip2' is not one of raw, gzip"));
 }
 
 /* How the slices are placed: --spacing, --heights, --heights-from-names. */

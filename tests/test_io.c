@@ -1511,7 +1511,7 @@ static void test_gzip_rewritable_head(void **state) {
     lsm_gzip_writer *g = NULL;
     lsm_err err;
     lsm_err_clear(&err);
-    assert_int_equal(lsm_gzip_writer_open(path, head0, HEAD, level, &g, &err), LSM_OK);
+    assert_int_equal(lsm_gzip_writer_open(path, NULL, 0, head0, HEAD, level, &g, &err), LSM_OK);
     size_t at = 0, step = 1;
     while (at < DATA) { /* uneven pieces: 1, 3, 9, ... bytes */
       size_t piece = step < DATA - at ? step : DATA - at;
@@ -1519,7 +1519,7 @@ static void test_gzip_rewritable_head(void **state) {
       at += piece;
       step *= 3;
     }
-    assert_int_equal(lsm_gzip_writer_finish(&g, head1, &err), LSM_OK);
+    assert_int_equal(lsm_gzip_writer_finish(&g, NULL, head1, &err), LSM_OK);
     assert_null(g);
     size_t gz_len = 0, len = 0;
     uint8_t *gz = read_bytes(path, &gz_len);
@@ -1541,8 +1541,8 @@ static void test_gzip_rewritable_head(void **state) {
   lsm_gzip_writer *g = NULL;
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(lsm_gzip_writer_open(path, NULL, 0, 1, &g, &err), LSM_OK);
-  assert_int_equal(lsm_gzip_writer_finish(&g, NULL, &err), LSM_OK);
+  assert_int_equal(lsm_gzip_writer_open(path, NULL, 0, NULL, 0, 1, &g, &err), LSM_OK);
+  assert_int_equal(lsm_gzip_writer_finish(&g, NULL, NULL, &err), LSM_OK);
   size_t gz_len = 0, len = 1;
   uint8_t *gz = read_bytes(path, &gz_len);
   uint8_t *plain = gunzip_bytes(gz, gz_len, &len);
@@ -1551,13 +1551,40 @@ static void test_gzip_rewritable_head(void **state) {
   free(gz);
   free(plain);
 
+  /* a plain prefix before the member (volume.nrrd's header with encoding gzip), rewritten at
+   * the end: the file is the new prefix, then a gzip member of the data alone */
+  {
+    const unsigned char pre0[] = "PROVISIONAL HEADER\n\n", pre1[] = "the final header..\n\n";
+    const size_t pre = sizeof pre0 - 1;
+    assert_int_equal(sizeof pre1 - 1, pre);
+    const uint8_t bytes[5] = {1, 2, 3, 4, 5};
+    assert_int_equal(lsm_gzip_writer_open(path, pre0, pre, NULL, 0, 1, &g, &err), LSM_OK);
+    assert_int_equal(lsm_gzip_writer_write(g, bytes, sizeof bytes, &err), LSM_OK);
+    assert_int_equal(lsm_gzip_writer_finish(&g, pre1, NULL, &err), LSM_OK);
+    gz = read_bytes(path, &gz_len);
+    assert_true(gz_len > pre);
+    assert_memory_equal(gz, pre1, pre);
+    plain = gunzip_bytes(gz + pre, gz_len - pre, &len);
+    assert_non_null(plain);
+    assert_int_equal(len, sizeof bytes);
+    assert_memory_equal(plain, bytes, sizeof bytes);
+    free(gz);
+    free(plain);
+    /* a prefix promised but not given at the end is an error */
+    assert_int_equal(lsm_gzip_writer_open(path, pre0, pre, NULL, 0, 1, &g, &err), LSM_OK);
+    lsm_err_clear(&err);
+    assert_int_equal(lsm_gzip_writer_finish(&g, NULL, NULL, &err), LSM_ERR_INTERNAL);
+    assert_null(g);
+  }
+
   /* errors are values, with the file named */
+  lsm_err_clear(&err);
   join(path, sizeof path, f->dir, "missing/x.gz");
-  assert_int_equal(lsm_gzip_writer_open(path, head0, HEAD, 1, &g, &err), LSM_ERR_IO);
+  assert_int_equal(lsm_gzip_writer_open(path, NULL, 0, head0, HEAD, 1, &g, &err), LSM_ERR_IO);
   assert_null(g);
   assert_msg_contains(err, "missing/x.gz");
-  assert_int_equal(lsm_gzip_writer_open(path, head0, 70000, 1, &g, &err), LSM_ERR_INTERNAL);
-  assert_int_equal(lsm_gzip_writer_open(path, head0, HEAD, 10, &g, &err), LSM_ERR_INTERNAL);
+  assert_int_equal(lsm_gzip_writer_open(path, NULL, 0, head0, 70000, 1, &g, &err), LSM_ERR_INTERNAL);
+  assert_int_equal(lsm_gzip_writer_open(path, NULL, 0, head0, HEAD, 10, &g, &err), LSM_ERR_INTERNAL);
   lsm_gzip_writer_abort(&g);
   lsm_gzip_writer_abort(NULL);
 }
