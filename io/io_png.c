@@ -93,7 +93,7 @@ typedef struct png_reader {
   png_io io;
   png_structp png;
   png_infop info;
-  const lsm_png_read_opts *opts; /* NULL: defaults */
+  const lsm_image_read_opts *opts; /* NULL: defaults */
   int header_only;
   png_uint_32 width, height;
   png_bytep buffer; /* one row, or the whole image when interlaced */
@@ -386,7 +386,7 @@ static lsm_status png_read_common(const char *path, png_reader *r, lsm_err *err)
   return st;
 }
 
-lsm_status lsm_png_read_mask(const char *path, const lsm_png_read_opts *opts,
+lsm_status lsm_png_read_mask(const char *path, const lsm_image_read_opts *opts,
                              lsm_mask *out, lsm_err *err) {
   png_reader r;
   r.opts = opts;
@@ -401,7 +401,7 @@ lsm_status lsm_png_read_mask(const char *path, const lsm_png_read_opts *opts,
   return st;
 }
 
-lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_image_read_opts *opts,
                                     lsm_mask *out, lsm_err *err) {
   png_reader r;
   r.opts = opts;
@@ -419,7 +419,7 @@ lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_png_re
 lsm_status lsm_png_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
                                lsm_err *err) {
   png_reader r;
-  lsm_png_read_opts opts = {0, max_pixels, 0};
+  lsm_image_read_opts opts = {0, max_pixels, 0};
   r.opts = &opts;
   r.header_only = 1;
   lsm_status st = png_read_common(path, &r, err);

@@ -293,7 +293,7 @@ static lsm_status read_rgba(TIFF *tif, const char *path, uint32_t w, uint32_t h,
 }
 
 /* The mask of an open TIFF (closed here). */
-static lsm_status read_mask(TIFF *tif, const char *name, const lsm_png_read_opts *opts,
+static lsm_status read_mask(TIFF *tif, const char *name, const lsm_image_read_opts *opts,
                             tiff_messages *msgs, lsm_mask *out, lsm_err *err) {
   uint32_t w = 0, h = 0;
   strip_layout layout;
@@ -310,7 +310,7 @@ static lsm_status read_mask(TIFF *tif, const char *name, const lsm_png_read_opts
   return st;
 }
 
-lsm_status lsm_tiff_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+lsm_status lsm_tiff_read_mask(const char *path, const lsm_image_read_opts *opts, lsm_mask *out,
                               lsm_err *err) {
   if (out) memset(out, 0, sizeof *out);
   if (!path || !out) return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to read a TIFF");
@@ -320,7 +320,7 @@ lsm_status lsm_tiff_read_mask(const char *path, const lsm_png_read_opts *opts, l
   return read_mask(tif, path, opts, &msgs, out, err);
 }
 
-lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_image_read_opts *opts,
                                      lsm_mask *out, lsm_err *err) {
   if (out) memset(out, 0, sizeof *out);
   if (!fp || !name || !out)
@@ -343,7 +343,7 @@ int lsm_is_tiff_name(const char *path) {
   return strcmp(ext, "tif") == 0 || strcmp(ext, "tiff") == 0;
 }
 
-lsm_status lsm_slice_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+lsm_status lsm_slice_read_mask(const char *path, const lsm_image_read_opts *opts, lsm_mask *out,
                                lsm_err *err) {
   return lsm_is_tiff_name(path) ? lsm_tiff_read_mask(path, opts, out, err)
                                 : lsm_png_read_mask(path, opts, out, err);

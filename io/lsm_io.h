@@ -28,12 +28,13 @@
 
 /* ---- PNG ---------------------------------------------------------------- */
 
-typedef struct lsm_png_read_opts {
+/* How a slice image (PNG or TIFF) becomes a mask. */
+typedef struct lsm_image_read_opts {
   int invert;          /* 1: foreground is dark (luminance < 50 %) */
   uint64_t max_pixels; /* refuse images with more pixels (0 = no limit) */
   int nonzero;         /* 1: foreground is any non-zero luminance (label masks
                           stored as 0/1); with invert, exactly zero */
-} lsm_png_read_opts;
+} lsm_image_read_opts;
 
 /* Reads a PNG of any bit depth (1..16) and colour type (gray, gray+alpha, RGB,
  * RGBA, palette, with or without tRNS) into a binary mask.  A pixel is
@@ -41,13 +42,13 @@ typedef struct lsm_png_read_opts {
  * compositing over black with its alpha) is >= 50 % of full scale, or < 50 %
  * with opts->invert.  The size is checked against opts->max_pixels from the
  * header, before any pixel buffer is allocated. */
-lsm_status lsm_png_read_mask(const char *path, const lsm_png_read_opts *opts,
+lsm_status lsm_png_read_mask(const char *path, const lsm_image_read_opts *opts,
                              lsm_mask *out, lsm_err *err);
 
 /* The same from an open stream positioned at the PNG signature (a file, a pipe,
  * or fmemopen() memory: the fuzzer uses that); name is used in messages.  The
  * stream is read but not closed. */
-lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_image_read_opts *opts,
                                     lsm_mask *out, lsm_err *err);
 
 /* Reads only the header: width and height. */
@@ -84,14 +85,14 @@ lsm_status lsm_png_write_rgb8(const char *path, const uint8_t *pixels, int width
  * other layout libtiff decodes (palette, YCbCr, tiles, separate planes, 2 or
  * 4 bits) is read as 8-bit RGBA.  Refused: several pages (one slice a
  * file), floating-point or signed samples, 16-bit samples outside strips. */
-lsm_status lsm_tiff_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+lsm_status lsm_tiff_read_mask(const char *path, const lsm_image_read_opts *opts, lsm_mask *out,
                               lsm_err *err);
 /* The same from an open, seekable stream positioned at the TIFF header
  * (fmemopen() memory: the fuzzer uses it); name is used in messages.  The
  * stream is read but not closed.  libtiff reads a stream without mapping it,
  * and then refuses small tiles (16 x 16 at 8 bits: "Invalid tile byte
  * count"), which it reads from a file. */
-lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_image_read_opts *opts,
                                      lsm_mask *out, lsm_err *err);
 /* Reads only the size, refusing (LSM_ERR_LIMIT) more than max_pixels pixels
  * (0 = no limit). */
@@ -101,7 +102,7 @@ lsm_status lsm_tiff_read_header(const char *path, uint64_t max_pixels, int *widt
 /* A slice image by its name: .tif or .tiff (any case) through the TIFF
  * reader, anything else through the PNG reader. */
 int lsm_is_tiff_name(const char *path);
-lsm_status lsm_slice_read_mask(const char *path, const lsm_png_read_opts *opts, lsm_mask *out,
+lsm_status lsm_slice_read_mask(const char *path, const lsm_image_read_opts *opts, lsm_mask *out,
                                lsm_err *err);
 lsm_status lsm_slice_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
                                  lsm_err *err);

@@ -135,7 +135,7 @@ static lsm_status stoppable_emit(void *ctx, const float *phi, int width, int hei
 typedef struct png_source {
   char **paths;
   size_t count;
-  lsm_png_read_opts read;
+  lsm_image_read_opts read;
 } png_source;
 
 /* A note when the first slice with foreground has black pixels and at
@@ -143,9 +143,9 @@ typedef struct png_source {
  * grey edge of a drawn mask (nor a dark grey background, with no black) but
  * a label map on 0 (labels 1, 2, ... with some at 128 or more), whose dark
  * labels read as background. */
-static lsm_status note_dark_labels(const char *path, const lsm_png_read_opts *ro, size_t bright,
+static lsm_status note_dark_labels(const char *path, const lsm_image_read_opts *ro, size_t bright,
                                    lsm_err *err) {
-  lsm_png_read_opts any = *ro;
+  lsm_image_read_opts any = *ro;
   any.nonzero = 1;
   lsm_mask m = {0, 0, NULL};
   LSM_TRY(lsm_slice_read_mask(path, &any, &m, err));
@@ -167,7 +167,7 @@ static lsm_status note_dark_labels(const char *path, const lsm_png_read_opts *ro
  * note says so.  (A stack that is uniformly dark but not black, with no zero
  * pixel, stays empty.)  Reads slices only until the first non-empty one, so a
  * normal stack costs one or two reads. */
-static lsm_status pick_foreground(char **paths, size_t count, lsm_png_read_opts *ro, int quiet,
+static lsm_status pick_foreground(char **paths, size_t count, lsm_image_read_opts *ro, int quiet,
                                   const char *dir, lsm_err *err) {
   int none_reach_half = 1, some_zero = 0, some_nonzero = 0;
   for (int pass = 0; pass < 2 && none_reach_half; ++pass) {
@@ -1405,7 +1405,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   size_t inputs = 0; /* run.json's input count, with --stride */
   char from[64] = ""; /* where --stride starts, when not at the first slice */
   lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, err);
-  lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
+  lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
   double *pool = NULL;

@@ -161,7 +161,7 @@ static void check_png(const char *dir, const char *name, const test_png *t, int 
   char path[256];
   join(path, sizeof path, dir, name);
   write_test_png(path, t);
-  lsm_png_read_opts opts = {invert, 0, 0};
+  lsm_image_read_opts opts = {invert, 0, 0};
   lsm_mask mask;
   lsm_err err;
   lsm_err_clear(&err);
@@ -283,7 +283,7 @@ static lsm_status read_test_tiff(const char *dir, const char *name, const test_t
   char path[256];
   join(path, sizeof path, dir, name);
   write_test_tiff(path, t);
-  lsm_png_read_opts opts = {0, 0, nonzero};
+  lsm_image_read_opts opts = {0, 0, nonzero};
   lsm_mask m;
   lsm_err_clear(err);
   lsm_status st = lsm_slice_read_mask(path, &opts, &m, err);
@@ -328,13 +328,13 @@ static void test_tiff_layouts(void **state) {
    * detection (pick_foreground) sets nonzero for such stacks */
   char path[256];
   join(path, sizeof path, f->dir, "labels16.tif");
-  lsm_png_read_opts plain = {0, 0, 0};
+  lsm_image_read_opts plain = {0, 0, 0};
   lsm_mask m;
   assert_int_equal(lsm_slice_read_mask(path, &plain, &m, &err), LSM_OK);
   assert_int_equal(lsm_mask_count(&m), 0);
   lsm_mask_free(&m);
   /* the pixel limit, from the header */
-  lsm_png_read_opts small = {0, TW * TH - 1, 0};
+  lsm_image_read_opts small = {0, TW * TH - 1, 0};
   lsm_err_clear(&err);
   assert_int_equal(lsm_slice_read_mask(path, &small, &m, &err), LSM_ERR_LIMIT);
   assert_msg_contains(err, "more than the limit of 239");
@@ -574,7 +574,7 @@ static void test_png_roundtrip_mask(void **state) {
   assert_int_equal(h, 23);
 
   lsm_mask back;
-  lsm_png_read_opts opts = {0, 0, 0};
+  lsm_image_read_opts opts = {0, 0, 0};
   assert_int_equal(lsm_png_read_mask(path, &opts, &back, &err), LSM_OK);
   assert_int_equal(back.width, 37);
   assert_int_equal(back.height, 23);
@@ -830,7 +830,7 @@ static void test_png_max_pixels(void **state) {
   assert_int_equal(lsm_png_write_gray8(path, px, 100, 100, &err), LSM_OK);
   free(px);
 
-  lsm_png_read_opts opts = {0, 5000, 0};
+  lsm_image_read_opts opts = {0, 5000, 0};
   lsm_mask m = {7, 7, (uint8_t *)&m};
   assert_int_equal(lsm_png_read_mask(path, &opts, &m, &err), LSM_ERR_LIMIT);
   assert_null(m.pixels);

@@ -75,7 +75,7 @@ static lsm_status outline_field(const char *dir, const char *set, int index, lsm
                                 lsm_err *err) {
   char path[4200];
   snprintf(path, sizeof path, "%s/%s/%03d.png", dir, set, index);
-  lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0};
+  lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0};
   lsm_mask m = {0, 0, NULL};
   LSM_TRY(lsm_slice_read_mask(path, &ro, &m, err));
   lsm_status st = lsm_grid_create(m.width, m.height, 1.0f, 1.0f, out, err);

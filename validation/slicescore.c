@@ -65,7 +65,7 @@ static components count_components(const lsm_mask *m, const lsm_mask *other, siz
 }
 
 static lsm_status score_line(const char *id, const char *result, const char *truth, lsm_err *err) {
-  lsm_png_read_opts ro = {0, (uint64_t)1 << 28, 0};
+  lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0};
   lsm_mask a = {0, 0, NULL}, b = {0, 0, NULL};
   lsm_slice_score s;
   lsm_status st = lsm_slice_read_mask(result, &ro, &a, err);

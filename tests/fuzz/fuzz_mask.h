@@ -33,13 +33,13 @@ static inline void fuzz_check_mask(lsm_status st, lsm_mask *m, const lsm_err *er
  * through read, from fmemopen() memory, with --invert and the label rule
  * from bits 0 and 1 of `last` (the input's last byte, before any repair) and
  * a 4 Mpixel limit, and checks the result (fuzz_check_mask). */
-typedef lsm_status (*fuzz_mask_reader)(FILE *fp, const char *name, const lsm_png_read_opts *opts,
+typedef lsm_status (*fuzz_mask_reader)(FILE *fp, const char *name, const lsm_image_read_opts *opts,
                                        lsm_mask *out, lsm_err *err);
 static inline void fuzz_read_mask(uint8_t *data, size_t size, uint8_t last, fuzz_mask_reader read,
                                   const char *name) {
   FILE *fp = fmemopen(data, size, "rb");
   if (!fp) abort();
-  lsm_png_read_opts opts = {last & 1, (uint64_t)1 << 22, (last >> 1) & 1};
+  lsm_image_read_opts opts = {last & 1, (uint64_t)1 << 22, (last >> 1) & 1};
   lsm_mask m;
   lsm_err err;
   lsm_err_clear(&err);
