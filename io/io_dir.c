@@ -81,9 +81,12 @@ static int has_extension(const char *name, const char *ext) {
   return 1;
 }
 
-/* The slice images read: PNG and TIFF. */
-static int slice_image(const char *name) {
-  return has_extension(name, "png") || has_extension(name, "tif") || has_extension(name, "tiff");
+int lsm_is_tiff_name(const char *path) {
+  return path && (has_extension(path, "tif") || has_extension(path, "tiff"));
+}
+
+int lsm_is_slice_image_name(const char *path) {
+  return path && (has_extension(path, "png") || lsm_is_tiff_name(path));
 }
 
 /* Other image formats slices often come in (a note counts those left out). */
@@ -130,7 +133,7 @@ lsm_status lsm_dir_list_slices(const char *dir, char ***paths, size_t *count, si
       break;
     }
     const char *name = e->d_name;
-    const int slice = slice_image(name);
+    const int slice = lsm_is_slice_image_name(name);
     if (name[0] == '.' || (!slice && !(others && other_image(name)))) continue;
     size_t name_len = strlen(name);
     size_t len = dir_len + (size_t)need_slash + name_len + 1;

@@ -16,7 +16,6 @@
  */
 #include "lsm_io.h"
 
-#include <ctype.h>
 #include <inttypes.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -332,16 +331,6 @@ lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_image
 }
 
 /* ---- slice images by name ------------------------------------------------------------ */
-
-int lsm_is_tiff_name(const char *path) {
-  const char *dot = path ? strrchr(path, '.') : NULL;
-  if (!dot || strchr(dot, '/')) return 0;
-  char ext[6] = {0};
-  size_t n = strlen(dot + 1);
-  if (n < 3 || n > 4) return 0;
-  for (size_t k = 0; k < n; ++k) ext[k] = (char)tolower((unsigned char)dot[1 + k]);
-  return strcmp(ext, "tif") == 0 || strcmp(ext, "tiff") == 0;
-}
 
 lsm_status lsm_slice_read_mask(const char *path, const lsm_image_read_opts *opts, lsm_mask *out,
                                lsm_err *err) {

@@ -99,9 +99,12 @@ lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_image
 lsm_status lsm_tiff_read_header(const char *path, uint64_t max_pixels, int *width, int *height,
                                 lsm_err *err);
 
-/* A slice image by its name: .tif or .tiff (any case) through the TIFF
+/* A slice image by its name (io_dir.c): .tif or .tiff (any case) through the TIFF
  * reader, anything else through the PNG reader. */
 int lsm_is_tiff_name(const char *path);
+/* Whether a file name ends like a slice image read: .png, .tif, .tiff (any
+ * case; io_dir.c, with lsm_is_tiff_name). */
+int lsm_is_slice_image_name(const char *path);
 lsm_status lsm_slice_read_mask(const char *path, const lsm_image_read_opts *opts, lsm_mask *out,
                                lsm_err *err);
 lsm_status lsm_slice_read_header(const char *path, uint64_t max_pixels, int *width, int *height,

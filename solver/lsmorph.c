@@ -17,7 +17,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -1264,8 +1263,7 @@ static int same_slice_name(const char *a, const char *b) {
   if (strcmp(a, b) == 0) return 1;
   const char *da = strrchr(a, '.'), *db = strrchr(b, '.');
   if (!da || !db || da - a != db - b || strncmp(a, b, (size_t)(da - a)) != 0) return 0;
-  const int png_a = strcasecmp(da, ".png") == 0, png_b = strcasecmp(db, ".png") == 0;
-  return (png_a || lsm_is_tiff_name(a)) && (png_b || lsm_is_tiff_name(b));
+  return lsm_is_slice_image_name(a) && lsm_is_slice_image_name(b);
 }
 
 /* The truth slice (0-based) that a result's first input is by the file names
