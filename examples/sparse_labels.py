@@ -15,7 +15,7 @@ saved as a label volume whose other slices are empty.  This script
      (the median step between drawn slices) further out, empty, when the volume has it:
      without it nothing would tell lsmorph where the structure ends;
   3. writes them as PNG masks with their heights in the volume's units (mm) and runs
-     `lsmorph reconstruct --pixel-size SX --dz SZ --values mask`, so every output slice lies
+     `lsmorph reconstruct --pixel-size SX,SY --dz SZ --values mask`, so every output slice lies
      on a slice of the volume and the drawn slices come back exactly;
   4. writes OUT as a uint8 volume with the input's header and affine (or NRRD geometry): L (1 with no --label)
      where the filled structure is, 0 elsewhere, for the slices from the first to the last
@@ -51,8 +51,9 @@ overlapping, in layers) is refused: export a labelmap or make the segments non-o
 OUT must have the input's format (NRRD to NIfTI or back is refused: their geometry conventions
 differ, LPS and RAS).
 
-The in-plane voxel spacing must be square (lsmorph takes one pixel size); resample first
-otherwise.  Options after "--" go to lsmorph (for example `-- --method pls --threads 4`).
+The in-plane voxel spacing need not be square (lsmorph takes the pixel's width and height:
+slices across the first axis of a 2.5 x 0.8 x 0.8 mm CT are 0.8 x 0.8 mm, across the second
+2.5 x 0.8 mm).  Options after "--" go to lsmorph (for example `-- --method pls --threads 4`).
 Needs numpy, and nibabel for NIfTI (Debian: python3-numpy, python3-nibabel).  Exit status 0, 1 on an
 error ("sparse_labels.py: error: ..."), 2 on a usage error.
 """
@@ -345,9 +346,9 @@ def read_volume(out, dtype):
              "the options after \"--\"?): %s" % (out, e))
 
 
-def run_lsmorph(args, options, masks, run, sx, sz, base, values, dtype, what=""):
+def run_lsmorph(args, options, masks, run, sx, sy, sz, base, values, dtype, what=""):
     """Runs lsmorph on masks (slice k of the volume -> boolean array (i, j)) of the slices in
-    run, with heights k * sz, in folder base; returns its volume as (slice, i, j), one slice per
+    run, with heights k * sz and pixels sx (along i) by sy (along j), in folder base; returns its volume as (slice, i, j), one slice per
     volume slice from run[0] to run[-1].  what names the label in messages ("" for one)."""
     src, out = os.path.join(base, "slices"), os.path.join(base, "out")
     shutil.rmtree(src, ignore_errors=True)  # no slices left from an earlier --keep run
@@ -358,7 +359,7 @@ def run_lsmorph(args, options, masks, run, sx, sz, base, values, dtype, what="")
     with open(os.path.join(base, "heights.txt"), "w") as f:
         f.write("".join("%.17g\n" % (k * sz) for k in run))
     cmd = [args.lsmorph, "reconstruct", src, "-o", out, "--heights", os.path.join(base, "heights.txt"),
-           "--pixel-size", repr(sx), "--dz", repr(sz), "--values", values, "--format", "raw",
+           "--pixel-size", "%r,%r" % (sx, sy), "--dz", repr(sz), "--values", values, "--format", "raw",
            "--no-preview", "--no-slices"] + options
     done = subprocess.run(cmd)
     if done.returncode != 0:
@@ -370,7 +371,7 @@ def run_lsmorph(args, options, masks, run, sx, sz, base, values, dtype, what="")
     return volume.transpose(0, 2, 1)
 
 
-def fill_all(args, extra, labels, stack, sx, sz, work):
+def fill_all(args, extra, labels, stack, sx, sy, sz, work):
     """--label all: (picked slices, uint8 stack (slice, i, j)), one lsmorph run per label."""
     values = atlas_labels(labels, args.labels)
     present = stack.reshape(stack.shape[0], -1).any(axis=1)
@@ -412,7 +413,7 @@ def fill_all(args, extra, labels, stack, sx, sz, work):
               % (value, count, len(values), run[0], run[-1]), file=sys.stderr)
         sys.stderr.flush()
         base = os.path.join(work, "label-%03d" % value)
-        sdf = run_lsmorph(args, extra or ["-q"], lambda k: stack[k] == value, run, sx, sz, base,
+        sdf = run_lsmorph(args, extra or ["-q"], lambda k: stack[k] == value, run, sx, sy, sz, base,
                           "sdf", "<f4", " on label %d" % value)
         part = best[run[0]:run[-1] + 1]
         lower = sdf < part
@@ -480,14 +481,11 @@ def main():
     axis = args.axis if args.axis is not None else max((zooms[a], a) for a in (0, 1, 2))[1]
     plane = [a for a in (0, 1, 2) if a != axis]
     sx, sy, sz = zooms[plane[0]], zooms[plane[1]], zooms[axis]
-    if abs(sx - sy) > 1e-6 * max(sx, sy):
-        fail("%s: in-plane spacing %g x %g is not square; resample the volume first"
-             % (args.labels, sx, sy))
     if value == "all":
         work = args.keep or tempfile.mkdtemp(prefix="sparse-labels-")
         try:
             stack = np.moveaxis(labels, axis, 0)  # (slice, i, j): slice k is stack[k]
-            values, picked, result = fill_all(args, extra, labels, stack, sx, sz, work)
+            values, picked, result = fill_all(args, extra, labels, stack, sx, sy, sz, work)
             save_volume(np.moveaxis(result, 0, axis))
         finally:
             if not args.keep:
@@ -505,7 +503,7 @@ def main():
 
     work = args.keep or tempfile.mkdtemp(prefix="sparse-labels-")
     try:
-        filled = run_lsmorph(args, extra, lambda k: stack[k], picked, sx, sz, work, "mask", np.uint8)
+        filled = run_lsmorph(args, extra, lambda k: stack[k], picked, sx, sy, sz, work, "mask", np.uint8)
         result = np.zeros(stack.shape, np.uint8)
         result[picked[0]:picked[-1] + 1] = np.where(filled == 255, value, 0)
         save_volume(np.moveaxis(result, 0, axis))

@@ -57,8 +57,10 @@ static const char reconstruct_help[] =
     "                         or unevenly); without it consecutive files are --spacing\n"
     "                         apart whatever their names (a note says when the names\n"
     "                         number the slices with gaps)\n"
-    "  --pixel-size S         physical size of a pixel (default 1); all distances,\n"
-    "                         heights and the output signed distance use this unit;\n"
+    "  --pixel-size S|SX,SY   physical size of a pixel (default 1), or its width (x,\n"
+    "                         along a row) and height (y, down a column) when it is\n"
+    "                         not square; all distances, heights and the output\n"
+    "                         signed distance use this unit;\n"
     "                         the pixel size, --spacing, --dz and every gap between\n"
     "                         heights must lie in 1e-30 .. 1e30 (lengths are floats);\n"
     "                         an output step below about 1.8e-15 of the largest\n"
@@ -78,8 +80,9 @@ static const char reconstruct_help[] =
 static const char reconstruct_help_output[] =
     "Output:\n"
     "  --dz Z                 output slice spacing (default: the pixel size, isotropic\n"
-    "                         voxels); output heights are z0, z0+dz, ... up to the last\n"
-    "                         input height; input heights on that grid get their input\n"
+    "                         voxels; the smaller side of a pixel that is not square);\n"
+    "                         output heights are z0, z0+dz, ... up to the last input\n"
+    "                         height; input heights on that grid get their input\n"
     "                         slice back exactly (a note says when the last one is not\n"
     "                         on it, and which --dz would end on it)\n"
     "  --per-iteration        the design document's mode: every solver iteration of\n"
@@ -195,7 +198,8 @@ static const char reconstruct_help_files[] =
     "                         first sample) in physical units.\n"
     "  surface.ply            (--mesh) binary little-endian PLY of the surface\n"
     "                         phi = 0 (marching tetrahedra, closed and manifold;\n"
-    "                         x = column * pixel, y = row * pixel, z = height;\n"
+    "                         x = column * pixel width, y = row * pixel height,\n"
+    "                         z = height;\n"
     "                         outward normals)\n"
     "  preview.png            up to 16 evenly spaced slices (input slices framed in\n"
     "                         orange)\n"
@@ -319,6 +323,29 @@ static lsm_status parse_length(const char *opt, const char *text, double *out, l
                     opt, text, LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   *out = v;
   return LSM_OK;
+}
+
+/* --pixel-size S (a square pixel) or SX,SY: the pixel's width (the step
+ * along a row, x) and height (down a column, y), each a length as above.
+ * (The x size first, as in NRRD's spacings and ITK's; DICOM's PixelSpacing
+ * lists the row step, y, first.) */
+static lsm_status parse_pixel_size(const char *opt, const char *text, double *dx, double *dy,
+                                   lsm_err *err) {
+  const char *comma = strchr(text, ',');
+  if (!comma) {
+    LSM_TRY(parse_length(opt, text, dx, err));
+    *dy = *dx;
+    return LSM_OK;
+  }
+  char first[64];
+  const size_t n = (size_t)(comma - text);
+  if (n >= sizeof first || strchr(comma + 1, ','))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL,
+                    "%s: '%s' is not one size S or two sizes SX,SY (x, then y)", opt, text);
+  memcpy(first, text, n);
+  first[n] = '\0';
+  LSM_TRY(parse_length(opt, first, dx, err));
+  return parse_length(opt, comma + 1, dy, err);
 }
 
 /* A limit counted in `unit` (--max-pixels, --max-voxels): a positive whole
@@ -453,7 +480,7 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       cli->heights_from_names = 1;
     } else if (IS("--pixel-size")) {
       NEEDS_VALUE();
-      LSM_TRY(parse_length(name, v, &so->pixel_size, err));
+      LSM_TRY(parse_pixel_size(name, v, &so->pixel_dx, &so->pixel_dy, err));
     } else if (IS("--dz")) {
       NEEDS_VALUE();
       LSM_TRY(parse_length(name, v, &so->dz, err));

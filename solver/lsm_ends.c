@@ -258,7 +258,7 @@ int lsm_end_profile_is_trend(lsm_end_profile profile) {
 }
 
 double lsm_end_depth(const lsm_grid *phi) {
-  return fmax(-(double)lsm_grid_min(phi), 0.5 * phi->dx);
+  return fmax(-(double)lsm_grid_min(phi), 0.5 * fmin(phi->dx, phi->dy));
 }
 
 double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma, double dx) {

@@ -271,7 +271,12 @@ static lsm_status write_montage(lsm_preview *p, const char *path, lsm_err *err) 
   int up = 1;
   int longest = p->tw > p->th ? p->tw : p->th;
   while (longest * (up + 1) <= THUMB_MIN * 2 && longest * up < THUMB_MIN) up++;
-  const int TW = p->tw * up, TH = p->th * up, F = 3, G = 6;
+  /* thumbnails in the slices' physical proportions: the longer physical side
+   * gets the longest side's length (a pixel need not be square) */
+  const double ex = p->tw * p->sx, ey = p->th * p->sy, emax = ex > ey ? ex : ey;
+  const long tw_shown = lround(longest * up * (ex / emax)), th_shown = lround(longest * up * (ey / emax));
+  const int TW = tw_shown > 0 ? (int)tw_shown : 1, TH = th_shown > 0 ? (int)th_shown : 1;
+  const int F = 3, G = 6;
   int cols = (int)ceil(sqrt((double)ns));
   if (cols < 1) cols = 1;
   int rows = (ns + cols - 1) / cols;
@@ -290,7 +295,9 @@ static lsm_status write_montage(lsm_preview *p, const char *path, lsm_err *err) 
       fill(&im, x0, y0, TW + 2 * F, TH + 2 * F, 120, 120, 126);
     for (int y = 0; y < TH; ++y)
       for (int x = 0; x < TW; ++x) {
-        int v = t->cov[(size_t)(y / up) * (size_t)p->tw + (size_t)(x / up)];
+        const size_t ty = (size_t)y * (size_t)p->th / (size_t)TH;
+        const size_t tx = (size_t)x * (size_t)p->tw / (size_t)TW;
+        int v = t->cov[ty * (size_t)p->tw + tx];
         int gv = 12 + v * 218 / 255;
         put(&im, x0 + F + x, y0 + F + y, gv, gv, gv);
       }

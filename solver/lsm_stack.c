@@ -68,7 +68,8 @@ void lsm_stack_opts_default(lsm_stack_opts *opts) {
   opts->align = LSM_ALIGN_AUTO;
   opts->interp = LSM_INTERP_CUBIC;
   opts->ends = LSM_ENDS_AUTO;
-  opts->pixel_size = 1.0;
+  opts->pixel_dx = 1.0;
+  opts->pixel_dy = 1.0;
   opts->dz = 0.0;
   opts->per_iteration = 0;
   opts->tol = 0.25;
@@ -239,7 +240,8 @@ static const double align_alike_iou = 0.5;     /* IoU at the best translation fr
 static const double align_alike_gain = 1.5;    /* and this many times the IoU in place: alike */
 
 static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b, int width,
-                                int height, lsm_align *align, lsm_err *err) {
+                                int height, double pixel_dx, double pixel_dy, lsm_align *align,
+                                lsm_err *err) {
   *align = asked;
   if (asked != LSM_ALIGN_AUTO) return LSM_OK;
   *align = LSM_ALIGN_NONE;
@@ -256,8 +258,10 @@ static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b,
   if (lsm_mask_overlap(&a->filled, &b->filled, dx, dy) <= in_place) return LSM_OK;
   int tx, ty;
   LSM_TRY(lsm_register_shift(&a->filled, &b->filled, &tx, &ty, err));
-  const long to_centroid = (long)(tx - dx) * (tx - dx) + (long)(ty - dy) * (ty - dy);
-  if (to_centroid >= (long)tx * tx + (long)ty * ty) return LSM_OK;
+  /* (physical lengths: a pixel need not be square) */
+  const double wx = pixel_dx * pixel_dx, wy = pixel_dy * pixel_dy;
+  const double to_centroid = wx * (tx - dx) * (tx - dx) + wy * (ty - dy) * (ty - dy);
+  if (to_centroid >= wx * tx * tx + wy * ty * ty) return LSM_OK;
   /* A move, not a change of shape: either the two barely touch in place and
    * the translation of largest overlap makes them somewhat alike (IoU >= 1/4),
    * or that translation makes them alike (IoU >= 1/2, and 1.5 times the IoU in
@@ -278,10 +282,11 @@ static lsm_status resolve_align(lsm_align asked, const slice *a, const slice *b,
 }
 
 static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_interp interp,
-                              int width, int height, double pixel, lsm_err *err) {
+                              int width, int height, double pixel_dx, double pixel_dy,
+                              lsm_err *err) {
   memset(f, 0, sizeof *f);
   lsm_align align, end_align = LSM_ALIGN_NONE;
-  LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, &align, err));
+  LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, pixel_dx, pixel_dy, &align, err));
   f->width = width;
   f->height = height;
   f->aligned = align == LSM_ALIGN_HULL;
@@ -307,7 +312,8 @@ static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_in
   const int ke = a->empty ? 1 : 2, kf = 3 - ke, kn = a->empty ? 3 : 0;
   if (interp == LSM_INTERP_CUBIC && a->empty != b->empty && asked != LSM_ALIGN_NONE &&
       window_usable(w, kn))
-    LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, &end_align, err));
+    LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, pixel_dx, pixel_dy,
+                          &end_align, err));
   f->end_aligned = end_align == LSM_ALIGN_HULL;
   if (end_align == LSM_ALIGN_HULL) {
     const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
@@ -348,7 +354,7 @@ static lsm_status frame_setup(frame *f, const window *w, lsm_align asked, lsm_in
   }
   f->pad = mx + 2;
   f->pad_y = my + 2;
-  f->clamp = (float)(pixel * hypot((double)width, (double)height));
+  f->clamp = (float)hypot(pixel_dx * width, pixel_dy * height);
   return LSM_OK;
 }
 
@@ -409,8 +415,8 @@ typedef struct pinhole_fill {
  * (whole rows of them where an edge moves one pixel in two steps), so they
  * leave a millionth of a pixel below zero: a reader that takes phi < 0 as
  * inside then draws the same shape as slices/. */
-static void break_zero_ties(float *phi, size_t cells, double pixel_size) {
-  const float below = (float)(-1e-6 * pixel_size);
+static void break_zero_ties(float *phi, size_t cells, double pixel) {
+  const float below = (float)(-1e-6 * pixel);
   for (size_t k = 0; k < cells; ++k)
     if (phi[k] == 0.0f) phi[k] = below;
 }
@@ -419,7 +425,8 @@ static lsm_status fill_pinholes(stack_run *r, lsm_err *err);
 
 static lsm_status emit(stack_run *r, double z, long input_index, lsm_err *err) {
   if (input_index < 0 && r->fill) LSM_TRY(fill_pinholes(r, err));
-  break_zero_ties(r->out, (size_t)r->width * (size_t)r->height, r->opts->pixel_size);
+  break_zero_ties(r->out, (size_t)r->width * (size_t)r->height,
+                  fmin(r->opts->pixel_dx, r->opts->pixel_dy));
   LSM_TRY(r->sink->emit(r->sink->ctx, r->out, r->width, r->height, z, input_index, err));
   r->done++;
   if (r->progress && r->progress->update)
@@ -433,7 +440,7 @@ static lsm_status emit_input(stack_run *r, const slice *s, size_t index, double 
   frame f;
   window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}, NULL, 0.0, 0, 0};
   LSM_TRY(frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height,
-                      r->opts->pixel_size, err));
+                      r->opts->pixel_dx, r->opts->pixel_dy, err));
   f.pad = 0;
   f.pad_y = 0;
   frame_extract(&f, r->image_phi, 0.0, r->out);
@@ -477,8 +484,8 @@ static void gap_free(gap *g) {
 
 /* phi of one part on the window around it (bounding box + margin, within
  * the image); *ox, *oy: the window's origin on the image. */
-static lsm_status part_phi(const lsm_mask *part, float h, lsm_grid **phi, int *ox, int *oy,
-                           lsm_err *err) {
+static lsm_status part_phi(const lsm_mask *part, const lsm_stack_opts *o, lsm_grid **phi, int *ox,
+                           int *oy, lsm_err *err) {
   int x0 = 0, y0 = 0, x1 = part->width - 1, y1 = part->height - 1;
   lsm_mask_bounds(part, &x0, &y0, &x1, &y1); /* a part is never empty */
   x0 = x0 - LSM_PART_MARGIN < 0 ? 0 : x0 - LSM_PART_MARGIN;
@@ -487,7 +494,8 @@ static lsm_status part_phi(const lsm_mask *part, float h, lsm_grid **phi, int *o
   y1 = y1 + LSM_PART_MARGIN >= part->height ? part->height - 1 : y1 + LSM_PART_MARGIN;
   *ox = x0;
   *oy = y0;
-  LSM_TRY(lsm_grid_create(x1 - x0 + 1, y1 - y0 + 1, h, h, phi, err));
+  LSM_TRY(lsm_grid_create(x1 - x0 + 1, y1 - y0 + 1, (float)o->pixel_dx, (float)o->pixel_dy, phi,
+                          err));
   return mask_phi(part, LSM_INPUT_MASK, -x0, -y0, *phi, err);
 }
 
@@ -524,14 +532,13 @@ static lsm_status gap_parts(stack_run *r, const window *w, gap *g, lsm_err *err)
     }
   }
   const int usable = st == LSM_OK && (left_a > 0) == (left_b > 0);
-  const float h = (float)r->opts->pixel_size;
   for (int k = 0; usable && st == LSM_OK && k < count; ++k) {
     g->parts = k + 1;
     g->part_dx[k] = mv[k].dx;
     g->part_dy[k] = mv[k].dy;
-    st = part_phi(&mv[k].part_a, h, &g->part_a[k], &g->part_ax[k], &g->part_ay[k], err);
+    st = part_phi(&mv[k].part_a, r->opts, &g->part_a[k], &g->part_ax[k], &g->part_ay[k], err);
     if (st == LSM_OK)
-      st = part_phi(&mv[k].part_b, h, &g->part_b[k], &g->part_bx[k], &g->part_by[k], err);
+      st = part_phi(&mv[k].part_b, r->opts, &g->part_b[k], &g->part_bx[k], &g->part_by[k], err);
   }
   if (usable && st == LSM_OK) {
     g->rest_empty = left_a == 0;
@@ -768,11 +775,12 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   memset(g, 0, sizeof *g);
   const lsm_stack_opts *o = r->opts;
   const slice *a = w->s[1], *b = w->s[2];
-  LSM_TRY(frame_setup(&g->f, w, o->align, o->interp, r->width, r->height, o->pixel_size, err));
+  LSM_TRY(frame_setup(&g->f, w, o->align, o->interp, r->width, r->height, o->pixel_dx,
+                      o->pixel_dy, err));
   const int nx = r->width + 2 * g->f.pad, ny = r->height + 2 * g->f.pad_y;
-  const float h = (float)o->pixel_size;
-  lsm_status st = lsm_grid_create(nx, ny, h, h, &g->phi_a, err);
-  if (st == LSM_OK) st = lsm_grid_create(nx, ny, h, h, &g->phi_b, err);
+  const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
+  lsm_status st = lsm_grid_create(nx, ny, hx, hy, &g->phi_a, err);
+  if (st == LSM_OK) st = lsm_grid_create(nx, ny, hx, hy, &g->phi_b, err);
   if (st == LSM_OK) st = slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad_y - g->f.dy[1], g->phi_a, err);
   if (st == LSM_OK) st = slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad_y - g->f.dy[2], g->phi_b, err);
   if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
@@ -787,7 +795,7 @@ static lsm_status gap_setup(stack_run *r, const window *w, gap *g, lsm_err *err)
   for (int side = 0; side < 2 && st == LSM_OK && (caps || slopes); ++side) {
     const int k = side ? 3 : 0;
     if (!window_usable(w, k)) continue;
-    st = lsm_grid_create(nx, ny, h, h, &beyond[side], err);
+    st = lsm_grid_create(nx, ny, hx, hy, &beyond[side], err);
     if (st == LSM_OK)
       st = slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], beyond[side], err);
   }
@@ -1006,7 +1014,7 @@ static int mask_has_hole(const lsm_mask *m, uint8_t *cls, int32_t *queue) {
 #define PINHOLE_FILL_CELLS 4
 static lsm_status fill_pinholes(stack_run *r, lsm_err *err) {
   pinhole_fill *f = r->fill;
-  const float thin = (float)(2.0 * r->opts->pixel_size);
+  const float thin = (float)(2.0 * fmax(r->opts->pixel_dx, r->opts->pixel_dy));
   const int nx = r->width, ny = r->height;
   const size_t n = (size_t)nx * (size_t)ny;
   uint8_t *cls = f->cls;
@@ -1020,9 +1028,9 @@ static lsm_status fill_pinholes(stack_run *r, lsm_err *err) {
     const size_t tail = flood4(cls, nx, ny, queue, 1, 1, 1, 2);
     if (tail > PINHOLE_FILL_CELLS) continue;
     if (!f->phi_a) {
-      const float h = (float)r->opts->pixel_size;
-      LSM_TRY(lsm_grid_create(nx, ny, h, h, &f->phi_a, err));
-      LSM_TRY(lsm_grid_create(nx, ny, h, h, &f->phi_b, err));
+      const float hx = (float)r->opts->pixel_dx, hy = (float)r->opts->pixel_dy;
+      LSM_TRY(lsm_grid_create(nx, ny, hx, hy, &f->phi_a, err));
+      LSM_TRY(lsm_grid_create(nx, ny, hx, hy, &f->phi_b, err));
       LSM_TRY(slice_phi(f->a, r->opts->input, 0, 0, f->phi_a, err));
       LSM_TRY(slice_phi(f->b, r->opts->input, 0, 0, f->phi_b, err));
     }
@@ -1396,7 +1404,7 @@ static int grid_not_above(const output_grid *g, size_t k, double z) {
 }
 
 double lsm_stack_output_dz(const lsm_stack_opts *opts) {
-  return opts->dz > 0.0 ? opts->dz : opts->pixel_size;
+  return opts->dz > 0.0 ? opts->dz : fmin(opts->pixel_dx, opts->pixel_dy);
 }
 
 size_t lsm_stack_output_count(const double *z, size_t count, double dz) {
@@ -1615,8 +1623,8 @@ static void compute_gap(const stack_run *base, size_t i, const gap_plan *plan,
   task.image_phi = NULL;
   task.out = lsm_alloc((size_t)base->width * (size_t)base->height, sizeof(float), &e, "output slice");
   lsm_status st = task.out ? lsm_grid_create(base->width, base->height,
-                                             (float)base->opts->pixel_size,
-                                             (float)base->opts->pixel_size, &task.image_phi, &e)
+                                             (float)base->opts->pixel_dx,
+                                             (float)base->opts->pixel_dy, &task.image_phi, &e)
                            : e.status;
   if (st == LSM_OK && base->opts->per_iteration) {
     slice a = {0}, b = {0};
@@ -1702,9 +1710,9 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
                       "slices %zu and %zu are %g apart, outside %g to %g (lengths are floats)", i,
                       i + 1, h, LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   }
-  if (!lsm_length_in_range(opts->pixel_size))
-    return lsm_fail(err, LSM_ERR_USAGE, NULL, "pixel size %g is outside %g to %g", opts->pixel_size,
-                    LSM_LENGTH_MIN, LSM_LENGTH_MAX);
+  if (!lsm_length_in_range(opts->pixel_dx) || !lsm_length_in_range(opts->pixel_dy))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "pixel size %g x %g is outside %g to %g",
+                    opts->pixel_dx, opts->pixel_dy, LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   if (opts->dz > 0.0 && !lsm_length_in_range(opts->dz))
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "dz %g is outside %g to %g", opts->dz,
                     LSM_LENGTH_MIN, LSM_LENGTH_MAX);
@@ -1740,8 +1748,8 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
   r.morph.particles = opts->method == LSM_METHOD_PLS;
   r.out = lsm_alloc((size_t)width * (size_t)height, sizeof(float), err, "output slice");
   if (!r.out) return err ? err->status : LSM_ERR_NOMEM;
-  lsm_status st = lsm_grid_create(width, height, (float)opts->pixel_size,
-                                  (float)opts->pixel_size, &r.image_phi, err);
+  lsm_status st = lsm_grid_create(width, height, (float)opts->pixel_dx, (float)opts->pixel_dy,
+                                  &r.image_phi, err);
   const int distributed = opts->transport && opts->transport->size > 1;
   if (st == LSM_OK && opts->per_iteration) {
     st = distributed ? run_distributed(&r, NULL, NULL, stats, err)

@@ -137,8 +137,9 @@ typedef struct lsm_stack_opts {
   lsm_align align;
   lsm_interp interp;   /* z-profile (default cubic) */
   lsm_end_rule ends;   /* how the cubic profile ends an object (default auto) */
-  double pixel_size;   /* physical size of a pixel (default 1) */
-  double dz;           /* output slice spacing; <= 0 means pixel_size */
+  double pixel_dx;     /* physical width of a pixel: the step along a row, x (default 1) */
+  double pixel_dy;     /* physical height of a pixel: the step down a column, y (default 1) */
+  double dz;           /* output slice spacing; <= 0 means the smaller of pixel_dx, pixel_dy */
   int per_iteration;   /* the document's output mode */
   double tol;          /* CP threshold (per-iteration mode, default 0.25) */
   int max_iter;        /* most solver steps per pair (default 100000) */
@@ -234,8 +235,9 @@ typedef struct lsm_progress {
   void (*update)(void *ctx, size_t done, size_t total, size_t pair, size_t pairs);
 } lsm_progress;
 
-/* The output slice spacing of default mode: --dz, or the pixel size when it
- * is not set (isotropic voxels). */
+/* The output slice spacing of default mode: --dz, or when it is not set the
+ * pixel size (isotropic voxels; the smaller side of a pixel that is not
+ * square, so that z is sampled as finely as the finer in-plane axis). */
 double lsm_stack_output_dz(const lsm_stack_opts *opts);
 
 /* Number of output slices in default mode: the heights z[0] + k dz up to

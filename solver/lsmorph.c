@@ -497,7 +497,9 @@ static lsm_status write_run_json(const char *path, int argc, char **argv, const 
   lsm_json_number(f, o->tol);
   fprintf(f, ", \"max_iter\": %d, \"per_iteration\": %s, \"pixel_size\": ", o->max_iter,
           o->per_iteration ? "true" : "false");
-  lsm_json_number(f, o->pixel_size);
+  lsm_json_number(f, o->pixel_dx);
+  fputs(", \"pixel_size_y\": ", f);
+  lsm_json_number(f, o->pixel_dy);
   fputs(", \"dz\": ", f);
   lsm_json_number(f, lsm_stack_output_dz(o));
   fprintf(f, ", \"invert\": %s, \"heights_from_names\": %s, \"threads\": %d, \"values\": ",
@@ -1039,22 +1041,22 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
     sink.write_slices = cli->write_slices;
     sink.max_voxels = cli->max_voxels;
     sink.input = cli->slice_dir;
-    const double pixel = cli->stack.pixel_size;
+    const double pixel_dx = cli->stack.pixel_dx, pixel_dy = cli->stack.pixel_dy;
     const double dz = lsm_stack_output_dz(&cli->stack);
     /* --nrrd-encoding gzip: the writer's gzip NRRD in place of the raw one */
     const unsigned formats = cli->nrrd_gzip && (cli->formats & LSM_FORMAT_NRRD)
                                  ? (cli->formats & ~LSM_FORMAT_NRRD) | LSM_FORMAT_NRRD_GZ
                                  : cli->formats;
-    st = lsm_volume_writer_open(tmp, formats, (lsm_values)cli->values, width, height, pixel, pixel,
-                                dz, 0.0, 0.0, z[0], &sink.volume, err);
+    st = lsm_volume_writer_open(tmp, formats, (lsm_values)cli->values, width, height, pixel_dx,
+                                pixel_dy, dz, 0.0, 0.0, z[0], &sink.volume, err);
     /* the mesh caps an object cut by the first or last slice half a slice step
      * beyond it: dz, or with --per-iteration (uneven heights, --dz unused) the
      * step to the neighbouring slice */
     if (st == LSM_OK && cli->mesh)
-      st = lsm_mesh_open(width, height, pixel, pixel, cli->stack.per_iteration ? 0.0 : dz,
+      st = lsm_mesh_open(width, height, pixel_dx, pixel_dy, cli->stack.per_iteration ? 0.0 : dz,
                          &sink.mesh, err);
     if (st == LSM_OK && cli->preview)
-      st = lsm_preview_open(width, height, pixel, pixel, dz, &sink.preview, err);
+      st = lsm_preview_open(width, height, pixel_dx, pixel_dy, dz, &sink.preview, err);
     if (st == LSM_OK) {
       snprintf(path, sizeof path, "%s/heights.txt", tmp);
       sink.heights = fopen(path, "w");

@@ -313,6 +313,7 @@ check "--per-iteration: run.json says \"evenly_spaced\": false" grep -q '"evenly
 check "--per-iteration: a note says the slices are not evenly spaced" grep -q "note: the output slices are not evenly spaced" "$TMP/e"
 check "outline pyramid: no note that it looks filled" sh -c "! grep -q 'looks filled' '$TMP/e'"
 for field in '"values": "sdf"' '"formats": ["nrrd"]' '"nrrd_encoding": "raw"' '"mesh": false' '"preview": false' \
+  '"pixel_size": 1, "pixel_size_y": 1,' \
   '"particles_per_cell": 16' '"pls_reseed": 0' '"pls_radius_adjust": false' '"seed": '; do
   check "run.json options record $field" grep -qF "$field" "$TMP/out-iter/run.json"
 done

@@ -31,6 +31,7 @@ static void test_reconstruct_defaults(void **state) {
   assert_int_equal(cli.spacing_given, 0);
   assert_int_equal(cli.nrrd_gzip, 0);
   assert_int_equal(cli.nrrd_encoding_given, 0);
+  assert_true(cli.stack.pixel_dx == 1.0 && cli.stack.pixel_dy == 1.0);
 }
 
 static void test_long_forms(void **state) {
@@ -72,6 +73,31 @@ static void test_placement(void **state) {
   char *valued[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--heights-from-names=1"};
   assert_int_equal(parse(&cli, &err, 6, valued), LSM_ERR_USAGE);
   assert_non_null(strstr(err.msg, "takes no value"));
+}
+
+/* --pixel-size S (square) or SX,SY (x, then y); each part a length. */
+static void test_pixel_size(void **state) {
+  (void)state;
+  lsm_cli cli;
+  lsm_err err;
+  char *square[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--pixel-size", "0.7"};
+  assert_int_equal(parse(&cli, &err, 7, square), LSM_OK);
+  assert_true(cli.stack.pixel_dx == 0.7 && cli.stack.pixel_dy == 0.7);
+  char *two[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--pixel-size=0.5,2e0"};
+  assert_int_equal(parse(&cli, &err, 6, two), LSM_OK);
+  assert_true(cli.stack.pixel_dx == 0.5 && cli.stack.pixel_dy == 2.0);
+  const char *bad[][2] = {{"1,", "--pixel-size: '' is not a number"},
+                          {",1", "--pixel-size: '' is not a number"},
+                          {"1,2,3", "is not one size S or two sizes SX,SY"},
+                          {"1,0", "--pixel-size: 0 must be positive"},
+                          {"1;2", "--pixel-size: '1;2' is not a number"},
+                          {"1,1e40", "--pixel-size: 1e40 is outside"}};
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--pixel-size", (char *)bad[k][0]};
+    assert_int_equal(parse(&cli, &err, 7, argv), LSM_ERR_USAGE);
+    if (!strstr(err.msg, bad[k][1]))
+      fail_msg("--pixel-size %s: '%s', expected '%s'", bad[k][0], err.msg, bad[k][1]);
+  }
 }
 
 /* score: --stride and --first are optional (run.json places the inputs). */
@@ -127,6 +153,7 @@ int main(void) {
       cmocka_unit_test(test_reconstruct_defaults),
       cmocka_unit_test(test_long_forms),
       cmocka_unit_test(test_placement),
+      cmocka_unit_test(test_pixel_size),
       cmocka_unit_test(test_score_options),
       cmocka_unit_test(test_help_topics),
   };

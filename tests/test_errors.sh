@@ -238,6 +238,9 @@ expect "--pixel-size too small for floats" 2 "--pixel-size: 1e-40 is outside 1e-
 expect "--dz too small for floats" 2 "--dz: 1e-31 is outside 1e-30 to 1e+30" out reconstruct good -o out --dz 1e-31
 expect "--pixel-size 0" 2 "--pixel-size: 0 must be positive" out reconstruct good -o out --pixel-size 0
 expect "--pixel-size -0.5" 2 "--pixel-size: -0.5 must be positive" out reconstruct good -o out --pixel-size=-0.5
+expect "--pixel-size with three sizes" 2 "--pixel-size: '1,2,3' is not one size S or two sizes SX,SY" out reconstruct good -o out --pixel-size 1,2,3
+expect "--pixel-size SX, without SY" 2 "--pixel-size: '' is not a number" out reconstruct good -o out --pixel-size 1,
+expect "--pixel-size SY too large" 2 "--pixel-size: 1e36 is outside 1e-30 to 1e+30" out reconstruct good -o out --pixel-size 1,1e36
 expect "--dz 0" 2 "--dz: 0 must be positive" out reconstruct good -o out --dz 0
 expect "--dz -1" 2 "--dz: -1 must be positive" out reconstruct good -o out --dz -1
 expect "unknown option" 2 "unknown option '--frobnicate'" out reconstruct good -o out --frobnicate

@@ -15,7 +15,8 @@
 #     (vtkMassProperties) within 1 % of the isosurface's, outward winding and
 #     normals
 #   - preview.png and preview3d.png are pictures
-# A second run checks --values mask with anisotropic physical spacing, and a
+# A second run checks --values mask with anisotropic physical spacing (pixels that are not
+# square), per-iteration runs a mesh on pixels that are not square either, and a
 # few bad options must fail cleanly.  Prints "formats: N passed, N failed".
 set -u
 BUILD=${1:-build}
@@ -73,30 +74,30 @@ if [ $rc -eq 0 ]; then
   check "surface.ply is binary little endian" grep -a -q '^format binary_little_endian 1.0' "$TMP/out/surface.ply"
 fi
 
-# ---- a mask volume with anisotropic physical spacing ---------------------------------------
+# ---- a mask volume with anisotropic physical spacing (pixels 0.5 x 0.75, slices 1 apart) -----
 # (heights from 5.5 on, so every format's z origin is checked against a value other than 0)
 n_ball=$(ls "$TMP/ball"/*.png | wc -l)
 awk -v n="$n_ball" 'BEGIN { for (k = 0; k < n; ++k) print 5.5 + 4 * k }' >"$TMP/heights55.txt"
-"$LSM" reconstruct "$TMP/ball" -o "$TMP/mask" --heights "$TMP/heights55.txt" --pixel-size 0.5 --dz 1 \
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/mask" --heights "$TMP/heights55.txt" --pixel-size 0.5,0.75 --dz 1 \
   --values mask --format raw,exr,vtk,nii.gz,nii,mha,nrrd -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --values mask exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
   check "heights from 5.5: heights.txt starts at 5.5" [ "$(head -n 1 "$TMP/mask/heights.txt")" = "5.5" ]
-  run_checks "$TMP/check2" "$PY" "$HELPER" check "$TMP/mask" --spacing 0.5 0.5 1 --values mask
+  run_checks "$TMP/check2" "$PY" "$HELPER" check "$TMP/mask" --spacing 0.5 0.75 1 --values mask
   mask_matches_slices "$TMP/mask"
 fi
 
 # ---- --nrrd-encoding gzip: the same volume.nrrd, its samples one gzip stream ------------------
 # The mask run again (every format, VTK reading volume.nrrd against volume.raw, spacing and
 # origin), and a signed-distance run: VTK reads the gzip volume.nrrd as the raw one's values.
-"$LSM" reconstruct "$TMP/ball" -o "$TMP/maskgz" --heights "$TMP/heights55.txt" --pixel-size 0.5 --dz 1 \
+"$LSM" reconstruct "$TMP/ball" -o "$TMP/maskgz" --heights "$TMP/heights55.txt" --pixel-size 0.5,0.75 --dz 1 \
   --values mask --format raw,exr,vtk,nii.gz,nii,mha,nrrd --nrrd-encoding gzip -q >"$TMP/log" 2>&1
 rc=$?
 check "--values mask --nrrd-encoding gzip exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
   check "--nrrd-encoding gzip: the header says encoding: gzip" grep -a -q "^encoding: gzip$" "$TMP/maskgz/volume.nrrd"
-  run_checks "$TMP/check2gz" "$PY" "$HELPER" check "$TMP/maskgz" --spacing 0.5 0.5 1 --values mask
+  run_checks "$TMP/check2gz" "$PY" "$HELPER" check "$TMP/maskgz" --spacing 0.5 0.75 1 --values mask
   check "--nrrd-encoding gzip: a mask shrinks more than 10x" \
     [ $(($(wc -c <"$TMP/mask/volume.nrrd") / $(wc -c <"$TMP/maskgz/volume.nrrd"))) -ge 10 ]
 fi
@@ -116,16 +117,16 @@ sys.exit(0 if img.GetDimensions() == (128, 128, 105) and np.array_equal(a, raw) 
 # (a ball cut by the first and last slices, so no slice is empty; its heights
 # are not symmetric, so no two input slices are equal)
 check "per-iteration slices written" "$PY" "$HELPER" ball "$TMP/pi" 64 41 8 24 31.5 32.2 18.7
-"$LSM" reconstruct "$TMP/pi" -o "$TMP/piout" --spacing 8 --pixel-size 0.5 --per-iteration \
+"$LSM" reconstruct "$TMP/pi" -o "$TMP/piout" --spacing 8 --pixel-size 0.5,0.6 --per-iteration \
   --format nrrd,mha,vtk,nii,nii.gz,exr,raw --mesh --no-slices -q >"$TMP/log" 2>&1
 rc=$?
 check "reconstruct --per-iteration exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
 if [ $rc -eq 0 ]; then
-  run_checks "$TMP/check3" "$PY" "$HELPER" check "$TMP/piout" --spacing 0.5 0.5 auto --values sdf --mesh \
+  run_checks "$TMP/check3" "$PY" "$HELPER" check "$TMP/piout" --spacing 0.5 0.6 auto --values sdf --mesh \
     --caps
 fi
 # --dz does nothing with --per-iteration: not to the mesh either (its caps are half a slice step out)
-"$LSM" reconstruct "$TMP/pi" -o "$TMP/piout2" --spacing 8 --pixel-size 0.5 --per-iteration --dz 5 \
+"$LSM" reconstruct "$TMP/pi" -o "$TMP/piout2" --spacing 8 --pixel-size 0.5,0.6 --per-iteration --dz 5 \
   --mesh --no-slices --no-preview -q >"$TMP/log" 2>&1
 check "--per-iteration --dz 5 gives the same mesh" cmp -s "$TMP/piout/surface.ply" "$TMP/piout2/surface.ply"
 

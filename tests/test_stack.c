@@ -58,6 +58,7 @@ static int on_contour(const shape *s, int x, int y) {
 typedef struct source_ctx {
   int width, height;
   int outline;          /* write contours instead of filled masks */
+  int y_step;           /* row y samples the shapes at y_step * y (masks; 1: y) */
   const slice_def *defs;
   size_t count;
   int loads;
@@ -65,8 +66,10 @@ typedef struct source_ctx {
 
 /* Mask: union of the outer shapes minus the strict inside of the holes. */
 static void paint(const source_ctx *c, const slice_def *d, lsm_mask *m) {
-  for (int y = 0; y < m->height; ++y)
+  const int step = c->y_step;
+  for (int row = 0; row < m->height; ++row)
     for (int x = 0; x < m->width; ++x) {
+      const int y = row * step;
       uint8_t v = 0;
       if (c->outline) {
         for (int k = 0; k < d->n; ++k) v |= (uint8_t)on_contour(&d->s[k], x, y);
@@ -76,7 +79,7 @@ static void paint(const source_ctx *c, const slice_def *d, lsm_mask *m) {
         for (int k = 0; k < d->n; ++k)
           if (d->s[k].hole && in_shape(&d->s[k], x, y) && !on_contour(&d->s[k], x, y)) v = 0;
       }
-      m->pixels[(size_t)y * m->width + x] = v;
+      m->pixels[(size_t)row * m->width + x] = v;
     }
 }
 
@@ -168,20 +171,25 @@ typedef struct run {
   lsm_err err;
 } run;
 
-static lsm_status run_stack(run *r, int w, int h, int outline, const slice_def *defs,
-                            const double *z, size_t count, const lsm_stack_opts *opts) {
+/* Runs a stack whose row y samples the shapes at y_step * y (1: every row;
+ * opts->pixel_dy says how far apart the rows are); returns the status, the
+ * sink holds the slices. */
+static lsm_status run_stack_rows(run *r, int w, int h, int outline, int y_step,
+                                 const slice_def *defs, const double *z, size_t count,
+                                 const lsm_stack_opts *opts) {
   memset(r, 0, sizeof *r);
-  r->src.width = w;
-  r->src.height = h;
-  r->src.outline = outline;
-  r->src.defs = defs;
-  r->src.count = count;
+  r->src = (source_ctx){w, h, outline, y_step, defs, count, 0};
   r->sink.width = w;
   r->sink.height = h;
   lsm_err_clear(&r->err);
   lsm_slice_source source = {&r->src, count, z, src_load, src_name};
   lsm_slice_sink sink = {&r->sink, sink_emit};
   return lsm_stack_run(&source, w, h, opts, &sink, r->stats, NULL, &r->err);
+}
+
+static lsm_status run_stack(run *r, int w, int h, int outline, const slice_def *defs,
+                            const double *z, size_t count, const lsm_stack_opts *opts) {
+  return run_stack_rows(r, w, h, outline, 1, defs, z, count, opts);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -567,7 +575,7 @@ static void test_scale_invariance(void **state) {
       lsm_stack_opts o;
       default_opts(&o);
       o.method = methods[m];
-      o.pixel_size = scales[k][0];
+      o.pixel_dx = o.pixel_dy = scales[k][0];
       o.dz = scales[k][1];
       run r;
       assert_int_equal(run_stack(&r, W, H, 0, defs, z, 6, &o), LSM_OK);
@@ -587,6 +595,76 @@ static void test_scale_invariance(void **state) {
       sink_free(&r.sink);
     }
     sink_free(&ref.sink);
+  }
+}
+
+/* ------------------------------------------------------------------------ */
+/* pixels that are not square                                                */
+
+/* Cells where the stack sampled with rows y_step apart (pixel_dy = y_step)
+ * and the same stack on square pixels disagree: row j of the first against
+ * row y_step j of the second, over every output slice (both runs have the
+ * same heights).  *phi_err: the largest |phi| difference at cells within
+ * `band` of the surface. */
+static size_t rows_disagree(const run *coarse, const run *fine, int y_step, float band,
+                            float *phi_err) {
+  assert_int_equal(coarse->sink.n, fine->sink.n);
+  size_t differ = 0;
+  *phi_err = 0.0f;
+  for (size_t k = 0; k < coarse->sink.n; ++k) {
+    const float *pc = coarse->sink.s[k].phi, *pf = fine->sink.s[k].phi;
+    for (int j = 0; j < coarse->sink.height; ++j)
+      for (int i = 0; i < W; ++i) {
+        const float a = pc[(size_t)j * W + i], b = pf[(size_t)(y_step * j) * W + i];
+        differ += (a <= 0.0f) != (b <= 0.0f);
+        if (fabsf(b) < band && fabsf(a - b) > *phi_err) *phi_err = fabsf(a - b);
+      }
+  }
+  return differ;
+}
+
+/* A pixel twice as tall as it is wide: discs (in physical units) sampled
+ * every other row, with pixel_dy = 2, give the shapes and signed distances of
+ * the same discs sampled on square pixels, read at every other row.  The
+ * distances, the morph's speed and the ends' erosion are physical; taking the
+ * pixel as square (pixel_dy = 1) draws ellipses that erode twice as fast
+ * across the rows. */
+static void test_pixel_not_square(void **state) {
+  (void)state;
+  const slice_def defs[5] = {{0, {{0}}},
+                             {1, {disc(50, 50, 14)}},
+                             {1, {disc(46, 52, 26)}},
+                             {1, {disc(54, 46, 10)}},
+                             {0, {{0}}}};
+  const double z[5] = {0, 8, 16, 24, 32};
+  const int hf = 101, hc = 51; /* rows: y = 0 .. 100, one in every two */
+  for (int m = 0; m < 2; ++m) {
+    lsm_stack_opts o;
+    default_opts(&o);
+    o.method = m ? LSM_METHOD_BLEND : LSM_METHOD_LS;
+    o.dz = 1.0;
+    run fine, coarse, square;
+    assert_int_equal(run_stack(&fine, W, hf, 0, defs, z, 5, &o), LSM_OK);
+    o.pixel_dy = 2.0;
+    assert_int_equal(run_stack_rows(&coarse, W, hc, 0, 2, defs, z, 5, &o), LSM_OK);
+    o.pixel_dy = 1.0;
+    assert_int_equal(run_stack_rows(&square, W, hc, 0, 2, defs, z, 5, &o), LSM_OK);
+    float err_right = 0.0f, err_square = 0.0f;
+    const size_t right = rows_disagree(&coarse, &fine, 2, 6.0f, &err_right);
+    const size_t wrong = rows_disagree(&square, &fine, 2, 6.0f, &err_square);
+    print_message("%s: %zu cells disagree (pixel 1 x 2), %zu taken as square; |phi| error "
+                  "near the surface %.3f, %.3f\n",
+                  m ? "blend" : "ls", right, wrong, (double)err_right, (double)err_square);
+    /* a coarse row's signed distance is off by up to half its height (1)
+     * where the circle's edge falls between rows; taken as square, the
+     * distances across the rows are half what they are */
+    if (err_right > 1.5f) fail_msg("|phi| differs by %.3f near the surface", (double)err_right);
+    /* the masks differ at a few cells of each slice's outline (33 slices) */
+    if (right > 8 * coarse.sink.n)
+      fail_msg("%zu cells disagree over %zu slices", right, coarse.sink.n);
+    sink_free(&fine.sink);
+    sink_free(&coarse.sink);
+    sink_free(&square.sink);
   }
 }
 
@@ -1318,6 +1396,7 @@ int main(void) {
       cmocka_unit_test(test_merge_no_pinholes),
       cmocka_unit_test(test_border_band),
       cmocka_unit_test(test_scale_invariance),
+      cmocka_unit_test(test_pixel_not_square),
       cmocka_unit_test(test_end_moves_on),
       cmocka_unit_test(test_branch_recedes),
       cmocka_unit_test(test_end_parts),

@@ -56,7 +56,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
       const lsm_stack_opts *o = &cli.stack;
       if (!cli.slice_dir || !cli.out_dir) abort();
       if (!(cli.spacing > 0) || !isfinite(cli.spacing)) abort();
-      if (!(o->pixel_size > 0) || !isfinite(o->pixel_size)) abort();
+      if (!(o->pixel_dx > 0) || !isfinite(o->pixel_dx)) abort();
+      if (!(o->pixel_dy > 0) || !isfinite(o->pixel_dy)) abort();
       if (o->dz < 0 || !isfinite(o->dz)) abort();
       if (!(o->morph.cfl > 0) || !isfinite(o->morph.cfl)) abort();
       if (!(o->tol > 0) || !isfinite(o->tol)) abort();
