@@ -44,9 +44,12 @@ double lsm_quantile(double *values, size_t n, double q) {
   return values[rank ? rank - 1 : 0];
 }
 
-lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_slice_score *out,
-                           double **dist, size_t *dn, size_t *dcap, lsm_err *err) {
+lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, double row_step,
+                           lsm_slice_score *out, double **dist, size_t *dn, size_t *dcap,
+                           lsm_err *err) {
   memset(out, 0, sizeof *out);
+  if (!(row_step > 0.0) || !isfinite(row_step))
+    return lsm_fail(err, LSM_ERR_INPUT, NULL, "row step %g is not a positive length", row_step);
   if (result->width != truth->width || result->height != truth->height)
     return lsm_fail(err, LSM_ERR_INPUT, NULL, "slice sizes differ (%dx%d vs %dx%d)", result->width,
                     result->height, truth->width, truth->height);
@@ -71,7 +74,7 @@ lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_sl
       uint8_t *b = malloc(n);
       if (!b) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate scoring buffers");
       boundary(full, b);
-      const double penalty = truth->width > truth->height ? truth->width : truth->height;
+      const double penalty = fmax((double)truth->width, (double)truth->height * row_step);
       lsm_status st = LSM_OK;
       for (size_t k = 0; st == LSM_OK && k < n; ++k)
         if (b[k]) st = append(dist, dn, dcap, penalty, err);
@@ -90,8 +93,8 @@ lsm_status lsm_score_slice(const lsm_mask *result, const lsm_mask *truth, lsm_sl
   }
   boundary(result, br);
   boundary(truth, bt);
-  st = lsm_edt_squared(br, result->width, result->height, 1.0, 1.0, dr, err);
-  if (st == LSM_OK) st = lsm_edt_squared(bt, truth->width, truth->height, 1.0, 1.0, dt, err);
+  st = lsm_edt_squared(br, result->width, result->height, 1.0, row_step, dr, err);
+  if (st == LSM_OK) st = lsm_edt_squared(bt, truth->width, truth->height, 1.0, row_step, dt, err);
   if (st != LSM_OK) goto done;
   size_t m = 0;
   double total = 0.0;

@@ -1194,6 +1194,25 @@ static lsm_status read_run_json(const char *result_dir, char path[4200], char **
                   at);
 }
 
+/* The step from row to row in pixel widths, the unit of score's distances:
+ * options.pixel_size_y / options.pixel_size of a result's run.json, 1 for
+ * square pixels and where run.json does not say (no run.json, or one written
+ * before pixels could be other than square). */
+static lsm_status result_row_step(const char *result_dir, double *row_step, lsm_err *err) {
+  static const char *const width_key[] = {"options", "pixel_size"};
+  static const char *const height_key[] = {"options", "pixel_size_y"};
+  char path[4200], *text = NULL;
+  *row_step = 1.0;
+  LSM_TRY(read_run_json(result_dir, path, &text, err));
+  double width = 0.0, height = 0.0;
+  if (text && lsm_json_find_number(text, width_key, 2, &width, NULL) == 1 &&
+      lsm_json_find_number(text, height_key, 2, &height, NULL) == 1 && width > 0.0 &&
+      height > 0.0 && isfinite(height / width) && height / width > 0.0)
+    *row_step = height / width;
+  free(text);
+  return LSM_OK;
+}
+
 /* The number of input slices a result was made from (input.slices of its
  * run.json, valid JSON); a run.json that does not say is an error. */
 static lsm_status result_input_count(const char *text, const char *path, size_t *count,
@@ -1405,6 +1424,8 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   size_t inputs = 0; /* run.json's input count, with --stride */
   char from[64] = ""; /* where --stride starts, when not at the first slice */
   lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, err);
+  double row_step = 1.0; /* pixel height / width: distances are in pixel widths */
+  if (st == LSM_OK) st = result_row_step(cli->result_dir, &row_step, err);
   lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
@@ -1490,7 +1511,7 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
       continue;
     }
     lsm_slice_score s;
-    if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, &pool, &pool_n, &pool_cap, err);
+    if (st == LSM_OK) st = lsm_score_slice(&a, &b, row_step, &s, &pool, &pool_n, &pool_cap, err);
     if (st == LSM_OK && per) {
       per[count] = s;
       per_at[count] = k;

@@ -646,6 +646,21 @@ rc=$?
 check "score of 0/1 label truth with a bright pixel held out: exit 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 check "score of 0/1 label truth with a bright pixel held out: Dice above 0.9 ($(cat "$TMP/o"))" \
   awk -F'"dice_volume": ' '{ split($2, v, ","); exit !(v[1] > 0.9) }' "$TMP/o"
+# score's distances are in pixel widths: a row step counts pixel_size_y / pixel_size of them
+# (run.json).  A held-out slice left empty counts the image size for each boundary pixel of
+# the truth: 48 columns, or 40 rows of pixels twice as tall.
+mkdir -p "$TMP/rowtruth" "$TMP/rowkept"
+printf 'empty %s 48x40\ngray8 %s 48x40 9\nempty %s 48x40\n' "$TMP/rowtruth/1.png" \
+  "$TMP/rowtruth/2.png" "$TMP/rowtruth/3.png" | /usr/bin/python3 tests/make_png.py -
+cp "$TMP/rowtruth/1.png" "$TMP/rowtruth/3.png" "$TMP/rowkept/"
+for px in 1 1,2; do
+  "$LSM" reconstruct "$TMP/rowkept" -o "$TMP/out-row$px" --spacing 2 --pixel-size $px --no-preview -q
+  "$LSM" score "$TMP/rowtruth" "$TMP/out-row$px" --stride 2 >"$TMP/row$px.json" 2>"$TMP/e"
+  check "score of pixels $px: exit 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+done
+check "score: an empty slice costs 48 pixel widths on square pixels ($(cat "$TMP/row1.json"))" \
+  grep -q '"hd95_pooled": 48,' "$TMP/row1.json"
+check "score: and 80 on pixels 1 x 2 ($(cat "$TMP/row1,2.json"))" grep -q '"hd95_pooled": 80,' "$TMP/row1,2.json"
 # --per-slice: the same scores, and each held-out slice's, which the means come from
 "$LSM" score "$TMP/labtruth" "$TMP/out-labkept" --stride 2 --per-slice >"$TMP/o2" 2>"$TMP/e"
 check "score --per-slice: exit 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]

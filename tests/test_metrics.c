@@ -16,13 +16,15 @@ static int brute_boundary(const lsm_mask *m, int x, int y) {
          !m->pixels[(size_t)(y - 1) * w + x] || !m->pixels[(size_t)(y + 1) * w + x];
 }
 
-/* Distance from (x, y) to the nearest boundary pixel centre of m. */
-static double brute_nearest(const lsm_mask *m, int x, int y) {
+/* Distance from (x, y) to the nearest boundary pixel centre of m, rows
+ * row_step apart (columns 1). */
+static double brute_nearest(const lsm_mask *m, int x, int y, double row_step) {
   double best = INFINITY;
   for (int v = 0; v < m->height; ++v)
     for (int u = 0; u < m->width; ++u)
       if (brute_boundary(m, u, v)) {
-        const double d = sqrt((double)((u - x) * (u - x) + (v - y) * (v - y)));
+        const double dy = (v - y) * row_step;
+        const double d = sqrt((double)((u - x) * (u - x)) + dy * dy);
         if (d < best) best = d;
       }
   return best;
@@ -34,14 +36,14 @@ static int cmp_double(const void *a, const void *b) {
 }
 
 /* Every boundary-to-boundary distance, both directions, sorted; *n of them. */
-static double *brute_distances(const lsm_mask *a, const lsm_mask *b, size_t *n) {
+static double *brute_distances(const lsm_mask *a, const lsm_mask *b, double row_step, size_t *n) {
   double *d = malloc(2 * (size_t)a->width * (size_t)a->height * sizeof *d);
   assert_non_null(d);
   *n = 0;
   for (int y = 0; y < a->height; ++y)
     for (int x = 0; x < a->width; ++x) {
-      if (brute_boundary(a, x, y)) d[(*n)++] = brute_nearest(b, x, y);
-      if (brute_boundary(b, x, y)) d[(*n)++] = brute_nearest(a, x, y);
+      if (brute_boundary(a, x, y)) d[(*n)++] = brute_nearest(b, x, y, row_step);
+      if (brute_boundary(b, x, y)) d[(*n)++] = brute_nearest(a, x, y, row_step);
     }
   qsort(d, *n, sizeof *d, cmp_double);
   return d;
@@ -78,20 +80,23 @@ static size_t overlap(const lsm_mask *a, const lsm_mask *b) {
 
 /* Scores result against truth (the call must succeed); *dist gets the
  * boundary distances (the caller frees it).  Returns their count. */
-static size_t score(const lsm_mask *result, const lsm_mask *truth, lsm_slice_score *s,
-                    double **dist) {
+static size_t score(const lsm_mask *result, const lsm_mask *truth, double row_step,
+                    lsm_slice_score *s, double **dist) {
   lsm_err err;
   lsm_err_clear(&err);
   *dist = NULL;
   size_t dn = 0, dcap = 0;
-  assert_int_equal(lsm_score_slice(result, truth, s, dist, &dn, &dcap, &err), LSM_OK);
+  assert_int_equal(lsm_score_slice(result, truth, row_step, s, dist, &dn, &dcap, &err), LSM_OK);
   return dn;
 }
 
+/* Rows as far apart as columns, and 2.5 times as far (pixels 2.5 times as
+ * tall as they are wide: distances in pixel widths). */
 static void test_matches_definitions(void **state) {
   (void)state;
   uint64_t seed = 0x9e3779b97f4a7c15u;
-  for (int trial = 0; trial < 40; ++trial) {
+  for (int trial = 0; trial < 80; ++trial) {
+    const double row_step = trial < 40 ? 1.0 : 2.5;
     const int w = 17 + (int)(lsm_test_rand(&seed) % 20), h = 11 + (int)(lsm_test_rand(&seed) % 20);
     lsm_mask a = lsm_test_mask(w, h), b = lsm_test_mask(w, h);
     paint_random(&a, &seed);
@@ -103,9 +108,9 @@ static void test_matches_definitions(void **state) {
     }
     lsm_slice_score s;
     double *dist;
-    const size_t dn = score(&a, &b, &s, &dist);
+    const size_t dn = score(&a, &b, row_step, &s, &dist);
     size_t n = 0;
-    double *ref = brute_distances(&a, &b, &n);
+    double *ref = brute_distances(&a, &b, row_step, &n);
     assert_int_equal(s.comparable, 1);
     assert_int_equal(s.area_result, area(&a));
     assert_int_equal(s.area_truth, area(&b));
@@ -141,7 +146,7 @@ static void test_known_rings(void **state) {
     }
   lsm_slice_score s;
   double *dist;
-  const size_t dn = score(&a, &b, &s, &dist);
+  const size_t dn = score(&a, &b, 1.0, &s, &dist);
   assert_int_equal(dn, 80);
   assert_close(s.dice, 200.0 / 244.0, 1e-12);
   assert_close(s.hd_max, sqrt(2.0), 1e-12);
@@ -153,7 +158,7 @@ static void test_known_rings(void **state) {
 }
 
 /* One side empty: not comparable; each boundary pixel of the other counts
- * with the penalty max(width, height), on a non-square image. */
+ * with the penalty max(width, height * row_step), on a non-square image. */
 static void test_one_side_empty(void **state) {
   (void)state;
   lsm_mask a = lsm_test_mask(40, 25), b = lsm_test_mask(40, 25);
@@ -163,23 +168,25 @@ static void test_one_side_empty(void **state) {
     for (int x = 0; x < 40; ++x) edges += (size_t)brute_boundary(&a, x, y);
   lsm_err err;
   lsm_err_clear(&err);
-  for (int side = 0; side < 2; ++side) {
+  for (int side = 0; side < 4; ++side) {
+    const double row_step = side < 2 ? 1.0 : 2.0, penalty = side < 2 ? 40.0 : 50.0;
     lsm_slice_score s;
     double *dist;
-    const size_t dn = score(side ? &b : &a, side ? &a : &b, &s, &dist);
+    const size_t dn = score(side % 2 ? &b : &a, side % 2 ? &a : &b, row_step, &s, &dist);
     assert_int_equal(s.comparable, 0);
     assert_close(s.dice, 0.0, 0.0);
     assert_true(isinf(s.hd95));
     assert_int_equal(dn, edges);
-    for (size_t k = 0; k < dn; ++k) assert_close(dist[k], 40.0, 0.0);
+    for (size_t k = 0; k < dn; ++k) assert_close(dist[k], penalty, 0.0);
     free(dist);
   }
   lsm_slice_score s;
-  assert_int_equal(lsm_score_slice(&b, &b, &s, NULL, NULL, NULL, &err), LSM_OK);
+  assert_int_equal(lsm_score_slice(&b, &b, 1.0, &s, NULL, NULL, NULL, &err), LSM_OK);
   assert_int_equal(s.comparable, 1); /* both empty: agree */
   assert_close(s.dice, 1.0, 0.0);
   lsm_mask c = lsm_test_mask(25, 40);
-  assert_int_equal(lsm_score_slice(&a, &c, &s, NULL, NULL, NULL, &err), LSM_ERR_INPUT);
+  assert_int_equal(lsm_score_slice(&a, &c, 1.0, &s, NULL, NULL, NULL, &err), LSM_ERR_INPUT);
+  assert_int_equal(lsm_score_slice(&a, &a, 0.0, &s, NULL, NULL, NULL, &err), LSM_ERR_INPUT);
   lsm_mask_free(&a);
   lsm_mask_free(&b);
   lsm_mask_free(&c);

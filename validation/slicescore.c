@@ -70,7 +70,7 @@ static lsm_status score_line(const char *id, const char *result, const char *tru
   lsm_slice_score s;
   lsm_status st = lsm_slice_read_mask(result, &ro, &a, err);
   if (st == LSM_OK) st = lsm_slice_read_mask(truth, &ro, &b, err);
-  if (st == LSM_OK) st = lsm_score_slice(&a, &b, &s, NULL, NULL, NULL, err);
+  if (st == LSM_OK) st = lsm_score_slice(&a, &b, 1.0, &s, NULL, NULL, NULL, err);
   size_t *stack = NULL;
   uint8_t *seen = NULL;
   if (st == LSM_OK) {
