@@ -274,7 +274,8 @@ static lsm_status write_montage(lsm_preview *p, const char *path, lsm_err *err) 
   /* thumbnails in the slices' physical proportions: the longer physical side
    * gets the longest side's length (a pixel need not be square) */
   const double ex = p->tw * p->sx, ey = p->th * p->sy, emax = ex > ey ? ex : ey;
-  const long tw_shown = lround(longest * up * (ex / emax)), th_shown = lround(longest * up * (ey / emax));
+  const long tw_shown = lround(longest * up * (ex / emax));
+  const long th_shown = lround(longest * up * (ey / emax));
   const int TW = tw_shown > 0 ? (int)tw_shown : 1, TH = th_shown > 0 ? (int)th_shown : 1;
   const int F = 3, G = 6;
   int cols = (int)ceil(sqrt((double)ns));
