@@ -131,11 +131,12 @@ static lsm_status stoppable_emit(void *ctx, const float *phi, int width, int hei
 
 /* ---- input: PNG or TIFF slices ---------------------------------------------------------------- */
 
-typedef struct png_source {
+/* The PNG and TIFF files of SLICE_DIR, in natural order, and how they read. */
+typedef struct slice_files {
   char **paths;
   size_t count;
   lsm_image_read_opts read;
-} png_source;
+} slice_files;
 
 /* A note when the first slice with foreground has black pixels and at
  * least as many that are non-zero but below 50 % as at or above it: not the
@@ -201,7 +202,7 @@ static lsm_status pick_foreground(char **paths, size_t count, lsm_image_read_opt
 /* With --input outline, a note when the first non-empty slice looks filled
  * (most of its foreground pixels have all four neighbours in it): outlines
  * are thin contours, and a filled region read as one has no inside. */
-static void note_filled_outlines(const png_source *src, const char *dir) {
+static void note_filled_outlines(const slice_files *src, const char *dir) {
   for (size_t k = 0; k < src->count; ++k) {
     lsm_mask m = {0, 0, NULL};
     lsm_err ignored;
@@ -282,7 +283,7 @@ static lsm_status input_heights(const lsm_cli *cli, char *const *paths, size_t c
  * where they lie (--heights-from-names), and the run would then fill nothing
  * between them.  Only when every name ends with a number and the numbers
  * increase. */
-static void note_numbered_names(const png_source *src, const char *dir) {
+static void note_numbered_names(const slice_files *src, const char *dir) {
   uint64_t first = 0, previous = 0, step = 0;
   int even = 1;
   for (size_t k = 0; k < src->count; ++k) {
@@ -320,14 +321,14 @@ static void note_heights_beside(const char *dir) {
                     "--heights to place them by it\n", path);
 }
 
-static lsm_status png_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
-  png_source *ps = ctx;
+static lsm_status slice_files_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
+  slice_files *ps = ctx;
   LSM_TRY(check_stop(err));
   return lsm_slice_read_mask(ps->paths[index], &ps->read, out, err);
 }
 
-static const char *png_name(void *ctx, size_t index) {
-  png_source *ps = ctx;
+static const char *slice_files_name(void *ctx, size_t index) {
+  slice_files *ps = ctx;
   return ps->paths[index];
 }
 
@@ -458,7 +459,7 @@ static void progress_update(void *ctx, size_t done, size_t total, size_t pair, s
 /* ---- run.json -------------------------------------------------------------------------------- */
 
 static lsm_status write_run_json(const char *path, int argc, char **argv, const lsm_cli *cli,
-                                 const png_source *src, const double *z, int width, int height,
+                                 const slice_files *src, const double *z, int width, int height,
                                  const out_sink *sink, const lsm_pair_stats *stats, int threads,
                                  const lsm_backend *backend, double wall, lsm_err *err) {
   FILE *f = fopen(path, "w");
@@ -717,7 +718,7 @@ static int foreign_folder(const char *dir) {
  * the voxels of the output volume (--max-voxels).  All sizes are computed in
  * 64-bit or double arithmetic, so nothing can wrap around.  On success
  * *width x *height is the slice size. */
-static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const double *z,
+static lsm_status check_inputs(const lsm_cli *cli, const slice_files *src, const double *z,
                                int *width, int *height, lsm_err *err) {
   struct stat sb, in;
   if (stat(cli->out_dir, &sb) == 0) {
@@ -853,7 +854,7 @@ static lsm_status check_inputs(const lsm_cli *cli, const png_source *src, const 
 
 /* A numerical failure names the iteration; add the gap (the pair of input
  * files) it happened in: the last pair whose statistics the stack started. */
-static void name_failed_pair(lsm_err *err, const png_source *src, const lsm_pair_stats *stats) {
+static void name_failed_pair(lsm_err *err, const slice_files *src, const lsm_pair_stats *stats) {
   if (!err || !stats) return;
   size_t pair = SIZE_MAX;
   for (size_t k = 0; k + 1 < src->count; ++k)
@@ -904,7 +905,7 @@ static lsm_status counted_send(void *ctx, size_t gap, const lsm_gap_result *resu
  * waiting for ever. */
 static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *transport,
                                      lsm_err *err) {
-  png_source src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
+  slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
   double *z = NULL;
   lsm_pair_stats *stats = NULL;
   lsm_backend *backend = NULL;
@@ -933,7 +934,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   }
   if (st == LSM_OK && !stop_signal) install_stop_handlers(1);
   if (st == LSM_OK) {
-    lsm_slice_source source = {&src, src.count, z, png_load, png_name};
+    lsm_slice_source source = {&src, src.count, z, slice_files_load, slice_files_name};
     st = lsm_stack_run(&source, width, height, &cli->stack, NULL, stats, NULL, err);
   }
   if (st != LSM_OK && counted.sent == 0) {
@@ -958,7 +959,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
   if (lsm_mpi_rank(mpi) != 0) return reconstruct_worker(cli, lsm_mpi_transport(mpi), err);
   cli->stack.transport = lsm_mpi_transport(mpi);
   const double t_start = wall_seconds();
-  png_source src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
+  slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
   double *z = NULL;
   lsm_pair_stats *stats = NULL;
   out_sink sink;
@@ -1073,7 +1074,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
               width, height, cli->slice_dir, lsm_method_name(cli->stack.method), threads);
     progress_state ps = {isatty(fileno(stderr)), -1, 0, t_start};
     lsm_progress progress = {&ps, progress_update};
-    lsm_slice_source source = {&src, src.count, z, png_load, png_name};
+    lsm_slice_source source = {&src, src.count, z, slice_files_load, slice_files_name};
     lsm_slice_sink out = {&sink, sink_emit};
     lsm_slice_sink stoppable = {&out, stoppable_emit};
     st = lsm_stack_run(&source, width, height, &cli->stack, &stoppable, stats,
@@ -1195,22 +1196,18 @@ static lsm_status read_run_json(const char *result_dir, char path[4200], char **
 }
 
 /* The step from row to row in pixel widths, the unit of score's distances:
- * options.pixel_size_y / options.pixel_size of a result's run.json, 1 for
- * square pixels and where run.json does not say (no run.json, or one written
- * before pixels could be other than square). */
-static lsm_status result_row_step(const char *result_dir, double *row_step, lsm_err *err) {
+ * options.pixel_size_y / options.pixel_size of a result's run.json (text), 1
+ * for square pixels and where run.json does not say (text NULL: no run.json,
+ * or one written before pixels could be other than square). */
+static double result_row_step(const char *text) {
   static const char *const width_key[] = {"options", "pixel_size"};
   static const char *const height_key[] = {"options", "pixel_size_y"};
-  char path[4200], *text = NULL;
-  *row_step = 1.0;
-  LSM_TRY(read_run_json(result_dir, path, &text, err));
   double width = 0.0, height = 0.0;
   if (text && lsm_json_find_number(text, width_key, 2, &width, NULL) == 1 &&
       lsm_json_find_number(text, height_key, 2, &height, NULL) == 1 && width > 0.0 &&
       height > 0.0 && isfinite(height / width) && height / width > 0.0)
-    *row_step = height / width;
-  free(text);
-  return LSM_OK;
+    return height / width;
+  return 1.0;
 }
 
 /* The number of input slices a result was made from (input.slices of its
@@ -1333,9 +1330,11 @@ static int first_by_names(const char *text, char **truth, size_t n_truth, const 
  * first input when every input is named as its truth slice (first_by_names),
  * else the first truth slice.  *inputs: run.json's input count with
  * --stride, 0 without a run.json; from: " from slice N" where the inputs do
- * not start at the first truth slice. */
+ * not start at the first truth slice; *row_step: the unit of the distances
+ * (result_row_step), from the same run.json. */
 static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, char from[64],
-                             size_t **kept, size_t *n_kept, size_t *inputs, lsm_err *err) {
+                             size_t **kept, size_t *n_kept, size_t *inputs, double *row_step,
+                             lsm_err *err) {
   const size_t k = (size_t)cli->stride;
   size_t first = cli->first > 0 ? (size_t)cli->first - 1 : 0;
   char path[4200], *text = NULL;
@@ -1360,6 +1359,7 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
   int named = 0;
   if (st == LSM_OK && cli->first == 0 && text)
     named = first_by_names(text, truth, n_truth, offsets, n_offsets, &first);
+  *row_step = result_row_step(text);
   free(text);
   if (first > 0) snprintf(from, 64, " from slice %zu", first + 1);
   if (st == LSM_OK && named && first > 0) {
@@ -1423,9 +1423,8 @@ static lsm_status score(const lsm_cli *cli, lsm_err *err) {
   LSM_TRY(lsm_dir_list_slices(cli->truth_dir, &truth, &n, NULL, err));
   size_t inputs = 0; /* run.json's input count, with --stride */
   char from[64] = ""; /* where --stride starts, when not at the first slice */
-  lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, err);
   double row_step = 1.0; /* pixel height / width: distances are in pixel widths */
-  if (st == LSM_OK) st = result_row_step(cli->result_dir, &row_step, err);
+  lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, &row_step, err);
   lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
   size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
