@@ -28,7 +28,7 @@ typedef struct end_part {
   double weight;  /* share of it that narrows like N -> F; the rest is a flat end */
   double rate;    /* dA/dz of the line through A_N and A_F toward the end, <= 0
                   * (cells per unit z); the narrowing share follows weight x it */
-  double power;   /* exponent p of its tip past mid-gap */
+  double power;   /* exponent p of its tip past mid-gap, 2 to 3 */
 } end_part;
 
 typedef struct end_parts {
@@ -48,15 +48,19 @@ static void end_parts_free(end_parts *e) {
 }
 
 /* Exponent p of the tip past mid-gap, area A_F (2 (1 - sigma))^p, from the
- * areas of F and of N, the slice beyond it.  A section that narrows toward
- * the end by 10 % or more closes like a cone (p = 2: the radius falls
- * linearly); one that keeps its size or grows (a flat end: the base of a
- * scanned mesh, a cut organ) gives no hint of where the object stops inside
- * the gap, and its area falls linearly (p = 1); p is linear in between. */
+ * areas of F and of N, the slice beyond it: 3 where the section narrows
+ * toward the end by 10 % or more (the radius falls as (1 - sigma)^1.5), 2
+ * where it keeps its size or grows (a flat end: the base of a scanned mesh, a
+ * cut organ, which gives no hint of where the object stops inside the gap;
+ * the radius falls linearly), linear in between.  One power less (a cone
+ * where it narrows, the area falling linearly where it is flat) was the rule
+ * up to session 40; the steeper tip closes an end earlier in the second half
+ * of its gap, where an object cut one empty slice beyond it has most often
+ * already ended (lsm_ends.h has the measurements). */
 static double end_tip_power(double area_f, double area_n) {
   const double narrowing = area_f > 0.0 ? (area_n - area_f) / area_f : 1.0;
-  const double cone_from = 0.1; /* narrowing at which the tip is a cone */
-  return 1.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
+  const double cone_from = 0.1; /* narrowing at which the tip is steepest */
+  return 2.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
 }
 
 /* Each component of `other` (N, or M beyond it) that overlaps F gives its
@@ -158,7 +162,7 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
     const double share = pc->area_f > 0.0 ? pc->nested / pc->area_f : 0.0;
     pc->weight = nb ? fmin(fmax((share - 0.4) / 0.2, 0.0), 1.0) : 0.0;
     pc->rate = nb ? fmin((pc->area_f - pc->area_n) / hn, 0.0) : 0.0;
-    pc->power = 1.0 + pc->weight * (end_tip_power(pc->area_f, pc->area_n) - 1.0);
+    pc->power = 2.0 + pc->weight * (end_tip_power(pc->area_f, pc->area_n) - 2.0);
   }
   /* every cell joins the part nearest to it (breadth-first from the parts),
    * so each part's erosion moves the field around it */
@@ -364,29 +368,40 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
                                                          : fmin(1.0, 2.0 * (1.0 - sigma));
   for (int c = 0; c < e->parts.count; ++c) {
     const end_part *pc = &e->parts.part[c];
-    /* the narrowing share: weight x the line through A_N and A_F */
-    const double narrowing = fmax(pc->weight * (pc->area_f + sigma * e->H * pc->rate), 0.0);
     const double tip_area = pc->area_f * pow(tip, pc->power);
-    e->target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, tip_area);
+    /* With a third section M beyond N the parabola through the areas of M,
+     * N and F caps the narrowing share; without M the line through A_N and
+     * A_F does, and the parabola through A_N, A_F and zero at the empty
+     * slice, the latest a quadratic area through N and F can close. */
+    const int has_m = pc->has_m && e->h_farther > 0.0;
+    e->target[c] = tip_area;
+    if (!has_m) {
+      const double narrowing = fmax(pc->weight * (pc->area_f + sigma * e->H * pc->rate), 0.0);
+      e->target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, tip_area);
+    }
     if (e->has_beyond) {
-      /* the parabola through the areas of N and F and a third point (Newton's
-       * form, z from F toward the end): M's area beyond N, or with no third
-       * section zero at the empty slice, the latest a quadratic area can
-       * close; it caps the share of the part that narrows like N -> F */
+      /* Newton's form, z from F toward the end */
       const double hn = e->trend_reach, z = sigma * e->H;
       const double d1 = (pc->area_f - pc->area_n) / hn;
       double curvature;
-      if (pc->has_m && e->h_farther > 0.0) {
+      if (has_m) {
         const double hm = e->h_farther, d0 = (pc->area_n - pc->area_m) / hm;
         curvature = (d1 - d0) / (hn + hm);
       } else {
         curvature = (-pc->area_f / e->H - d1) / (e->H + hn);
       }
-      const double parabola = pc->area_f + d1 * z + curvature * z * (z + hn);
+      /* a parabola opening upward is held at its vertex past it: an area
+       * that shrank toward F and would grow again closes no later */
+      double zc = z;
+      if (curvature > 0.0) {
+        const double z_vertex = -(d1 + curvature * hn) / (2.0 * curvature);
+        if (z_vertex > 0.0 && z > z_vertex) zc = z_vertex;
+      }
+      const double parabola = pc->area_f + d1 * zc + curvature * zc * (zc + hn);
       e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
                                             pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
     }
-    e->least[c] = tip_floor * tip_area;
+    e->least[c] = tip_floor * pc->area_f * pow(tip, pc->power - 1.0);
     e->target[c] = fmax(e->target[c], e->least[c]);
   }
   erode_parts(work, full, &e->parts, e->target, e->least, e->scratch, e->raise);

@@ -41,18 +41,20 @@
  *     area (a paraboloid), so the area is capped by the line through the areas
  *     of N and F, A(sigma) = A_F - sigma H (A_N - A_F) / h_N when the object
  *     narrows toward its end (A_F otherwise); past mid-gap also by
- *     A_F (2 (1 - sigma))^p, a tip closing at the empty slice, p = 2 (a cone)
- *     where the section narrows toward the end by 10 % or more and p = 1 (area
- *     falling linearly) where it does not.  With a third section M beyond N
- *     (one of M's components reaching the part) the area is also capped by
- *     the parabola through the areas of M, N and F, for the share of the part
+ *     A_F (2 (1 - sigma))^p, a tip closing at the empty slice, p = 3 where
+ *     the section narrows toward the end by 10 % or more and p = 2 (a cone)
+ *     where it does not.  With a third section M beyond N (one of M's
+ *     components reaching the part) the area is capped instead of that line
+ *     by the parabola through the areas of M, N and F, for the share of the part
  *     that narrows like N -> F: the area of a smooth solid's section near its
  *     end is close to quadratic in z (exactly so for an ellipsoid, a cone, a
  *     paraboloid and a cylinder), so an end whose sections grew ever more
  *     slowly toward F, or already shrank before it (a rounded blob past its
  *     widest section), closes where that parabola says rather than staying
  *     whole up to mid-gap.  Where the parabola stays above A_F (a cylinder,
- *     a cone's base) it changes nothing.  Measured
+ *     a cone's base) it changes nothing; one that opens upward is held at
+ *     its vertex past it (an area that shrank toward F does not grow again).
+ *     Measured (with the line cap as well, and the tip one power lower)
  *     with validation/organs.py (16 random blobs standing in for CT organs):
  *     pooled Dice every 16th 0.8708 -> 0.8803, pooled HD95 13.38 -> 11.16 px;
  *     padded.py every 16th 0.8998 -> 0.9013, 6.18 -> 6.01 px; meshes.py every
@@ -72,8 +74,8 @@
  *     atlas.py every 8th 0.8749 -> 0.8734, every 16th 0.7162 -> 0.7160 (three
  *     short ends that stay flat lose 0.02 to 0.04, four stacks gain).
  *     However fast the line, the parabola or the per-cell
- *     trend close an end, it keeps a tenth of the tip, A_F (2 (1 - sigma))^p
- *     / 10 cells (the deepest of the trended field, F's deepest where the
+ *     trend close an end, it keeps a tenth of a tip one power lower,
+ *     A_F (2 (1 - sigma))^(p - 1) / 10 cells (the deepest of the trended field, F's deepest where the
  *     trend is uniform, lowering the field if the trend took them, never
  *     past F; cells tied with the last one kept stay): the
  *     object is known to reach at least the section next to F, and a
@@ -83,9 +85,24 @@
  *     3.09 -> 2.81 px; with the ends at every offset (end_offsets.py, 9
  *     solids every 8th / 16th) it costs at most 0.0014 pooled Dice (a
  *     quarter of the tip instead: organs 0.9638 / 2.60 px, but a 21-slice
- *     ball with its ends anywhere every 8th 2.85 -> 34.6 px).  Faster or
- *     earlier tips and faster rounded caps for two-section ends were
- *     measured and not kept (validation/measurements/organs.md).  With no slice beyond F
+ *     ball with its ends anywhere every 8th 2.85 -> 34.6 px).  Earlier tips
+ *     and faster rounded caps for two-section ends were measured and not
+ *     kept (validation/measurements/organs.md).  The tip one power steeper
+ *     (p = 3 / 2 from 2 / 1), with the parabola alone where M exists, and
+ *     the floor at a tenth of the former tip (session 41), pooled Dice /
+ *     HD95 px, mean of each set: organs.py every 4th 0.9839 / 1.03 -> 0.9839
+ *     / 1.00, every 8th 0.9637 / 2.80 -> 0.9639 / 2.80, every 16th 0.8915 /
+ *     10.21 -> 0.8965 / 9.50; atlas.py every 8th 0.8732 / 4.06 -> 0.8741 /
+ *     4.02, every 16th 0.7180 / 8.93 -> 0.7174 / 9.06; meshes.py every 16th
+ *     0.8994 / 8.54 -> 0.8988 / 8.72; ct.py every 8th 0.8569 -> 0.8625,
+ *     every 16th 0.6314 / 5.82 -> 0.6230 / 6.32; padded.py every 8th 0.9671
+ *     / 2.09 -> 0.9609 / 2.56, every 16th 0.9017 / 6.07 -> 0.8894 / 7.49
+ *     (flat ends of analytic solids cut one slice beyond lose, the bunny
+ *     every 16th 0.9334 -> 0.9316); p = 4 / 3 lost on every set but organs.
+ *     It was taken because it is the one change that put the default ahead
+ *     of both monotone-cubic references on every proxy set (organs every
+ *     16th: pchip-R 0.8947, pchip-c10 0.8935; validation/measurements/
+ *     reference.md).  With no slice beyond F
  *     (a lone section: an object shorter than about two gaps) nothing tells
  *     how it ends, and it is treated as a flat end; a paraboloid closing at
  *     mid-gap, the rule before, left half of each gap empty where such an

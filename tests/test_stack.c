@@ -515,10 +515,12 @@ static void test_end_parts(void **state) {
     assert_true((double)left[k] <= line && (double)left[k] >= 0.85 * line - 4.0);
   }
   /* past the left disc's line (z = 4) a tenth of its cone tip is left; the
-   * lone disc's tip, its area falling linearly, goes on far larger */
+   * lone disc's tip, a cone's, A_F (3 / 4)^2 at z = 3, is far larger */
   const double tenth = 0.1 * (double)left[8] * pow(3.0 / 4.0, 2.0);
   assert_true(left[3] >= 1 && fabs((double)left[3] - tenth) <= 8.0);
-  assert_true((double)right[3] >= 0.85 * 0.75 * (double)right[8] - 4.0);
+  const double cone = (double)right[8] * pow(3.0 / 4.0, 2.0);
+  assert_true((double)right[3] <= cone && (double)right[3] >= 0.85 * cone - 4.0);
+  assert_true((double)right[3] > 2.0 * tenth);
   sink_free(&r.sink);
 }
 
@@ -882,8 +884,8 @@ static void test_branch_recedes(void **state) {
  * empty at z = 10): areas strictly decrease while non-empty, the last
  * non-empty slice is at z <= 5, and the disc is still there just after the
  * input (z = 1).  Cubic profile: nothing tells how a lone section ends, so it
- * is a flat end: whole up to mid-gap, then a tip whose area falls linearly to
- * the empty slice, A_F 2 (1 - z / 10), non-empty up to z = 9.  Appearing
+ * is a flat end: whole up to mid-gap, then a cone's tip to the empty slice,
+ * A_F (2 (1 - z / 10))^2, non-empty up to z = 9.  Appearing
  * (the reverse): the mirror image. */
 static void test_vanish_appear(void **state) {
   (void)state;
@@ -913,7 +915,7 @@ static void test_vanish_appear(void **state) {
       assert_int_equal(last, 9);
       for (int k = 1; k <= 5; ++k) assert_int_equal(a[k], a[0]);
       for (int k = 6; k <= 9; ++k) {
-        const double tip = (double)a[0] * 2.0 * (1.0 - k / 10.0);
+        const double tip = (double)a[0] * pow(2.0 * (1.0 - k / 10.0), 2.0);
         assert_true(a[k] < a[k - 1] && (double)a[k] <= tip && (double)a[k] >= 0.85 * tip - 4.0);
       }
     } else {
