@@ -10,7 +10,7 @@ curved or sheet-like shapes with ragged voxel outlines, several of them in
 more than one piece.
 
     /usr/bin/python3 validation/atlas.py [BUILD_DIR] [--strides 2,4,8]
-        [--shapes caudate-L-z,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
+        [--shapes caudate-L-z,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10]
         [--offsets first|all] [--margin M]
         [-- EXTRA LSMORPH OPTIONS]
 
@@ -91,7 +91,7 @@ def structure(image, names, hemisphere, level, name):
 
 def main():
     lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
-        "--strides": "2,4,8", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
+        "--strides": "2,4,8", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10",
         "--shapes": ",".join("%s-%s" % (s, a) for s in STRUCTURES for a in "zyx")}), "atlas")
     image, names = load_atlas(meshes.cache_dir())
 

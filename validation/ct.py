@@ -12,7 +12,7 @@ organs of organs.py are random solids): a small rounded lesion, a tail on one
 side.
 
     /usr/bin/python3 validation/ct.py [BUILD_DIR] [--strides 2,4,8]
-        [--shapes nodule-z,nodule-y,nodule-x] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
+        [--shapes nodule-z,nodule-y,nodule-x] [--methods ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10]
         [--offsets first|all] [--margin M]
         [-- EXTRA LSMORPH OPTIONS]
 
@@ -65,7 +65,7 @@ def crop(stack, margin=3):
 
 def main():
     lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
-        "--strides": "2,4,8", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
+        "--strides": "2,4,8", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10",
         "--shapes": "nodule-z,nodule-y,nodule-x"}), "ct")
     volume = load_nodule(meshes.cache_dir())
 

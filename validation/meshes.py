@@ -11,7 +11,7 @@ analytic solids lack (thin parts, ears, a tail, a handle and a spout, the
 brain's folds: sulci a pixel or two wide).
 
     /usr/bin/python3 validation/meshes.py [BUILD_DIR] [--strides 4,8,16]
-        [--shapes bunny-x,bunny-y,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
+        [--shapes bunny-x,bunny-y,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10]
         [--offsets first|all] [--margin M]
         [-- EXTRA LSMORPH OPTIONS]
 
@@ -179,7 +179,7 @@ def voxelise(verts, tris, n=SIZE):
 
 def main():
     lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
-        "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
+        "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10",
         "--shapes": ",".join("%s-%s" % (m, a) for m in PACKAGES for a in "xyz")}), "meshes")
     cache = cache_dir()
 

@@ -12,7 +12,7 @@ to the last kept one scored with `lsmorph score` against the plain monotone
 cubics of padded.py.  Deterministic (seeded); no download.
 
     /usr/bin/python3 validation/organs.py [BUILD_DIR] [--strides 4,8,16]
-        [--shapes organ0,organ1,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R]
+        [--shapes organ0,organ1,...] [--methods ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10]
         [--offsets first|all] [--margin M]
         [-- EXTRA LSMORPH OPTIONS]
 
@@ -64,7 +64,7 @@ def organs():
 
 def main():
     lsm, opts, extra = eo.parse_args(sys.argv[1:], dict(padded.OPTIONS, **{
-        "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R",
+        "--strides": "4,8,16", "--methods": "ls,pchip-mirror,pchip-zero,pchip-R,pchip-c10",
         "--shapes": ",".join("organ%d" % i for i in range(COUNT))}), "organs")
     wanted = opts["--shapes"].split(",")
     unknown = [s for s in wanted if s not in ["organ%d" % i for i in range(COUNT)]]
