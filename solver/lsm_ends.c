@@ -7,9 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Every end keeps at least this share of its tip A_F (2 (1 - sigma))^p,
- * however fast the line or the parabola of its areas closes it: a section
- * where the object may still be is not left empty (see the header). */
+/* Every end keeps at least this share of a tip one power lower than its own,
+ * A_F (2 (1 - sigma))^(p - 1), however fast the line, the parabola of its
+ * areas or its own tip close it: a section where the object may still be is
+ * not left empty (see the header). */
 static const double tip_floor = 0.1;
 
 static int compare_float(const void *x, const void *y) {
