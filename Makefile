@@ -57,9 +57,11 @@ DEPS_STAMP := $(BUILD)/.deps-ok
 # Only for validation/end_offsets.py's plain-spline references (make validate).
 VALIDATE_PACKAGES := python3-scipy
 
-LIB_SRC := $(wildcard solver/lsm_*.c) $(wildcard io/*.c) $(wildcard kernels/*.c)
+# The library: every room's sources but the program's main (solver/app/lsmorph.c).
+APP_MAIN := solver/app/lsmorph.c
+LIB_SRC := $(filter-out $(APP_MAIN),$(wildcard solver/*/*.c) $(wildcard io/*.c) $(wildcard kernels/opencl/*.c))
 LIB_OBJ := $(patsubst %.c,$(BUILD)/obj/%.o,$(LIB_SRC))
-APP_OBJ := $(BUILD)/obj/solver/lsmorph.o
+APP_OBJ := $(patsubst %.c,$(BUILD)/obj/%.o,$(APP_MAIN))
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 EXAMPLE_SRC := $(wildcard examples/*.c)
@@ -108,9 +110,9 @@ $(KERNEL_GEN): kernels/morph.cl kernels/lsm_cell.h kernels/lsm_particle_cell.h
 	         print "#line " (NR + 1) " \"morph.cl\""; next } { print }' kernels/morph.cl \
 	    | od -An -v -tx1 | sed 's/^ *//; s/ *$$//; s/  */,0x/g; s/^/0x/; s/$$/,/'; \
 	  echo '0x00};'; } > $@.tmp && mv $@.tmp $@
-$(BUILD)/obj/kernels/lsm_backend_cl.o $(BUILD)/fuzz/obj/kernels/lsm_backend_cl.o: $(KERNEL_GEN)
-$(BUILD)/obj/kernels/lsm_backend_cl.o: CFLAGS += -I$(BUILD)/gen
-$(BUILD)/fuzz/obj/kernels/lsm_backend_cl.o: FUZZ_CFLAGS += -I$(BUILD)/gen
+$(BUILD)/obj/kernels/opencl/lsm_backend_cl.o $(BUILD)/fuzz/obj/kernels/opencl/lsm_backend_cl.o: $(KERNEL_GEN)
+$(BUILD)/obj/kernels/opencl/lsm_backend_cl.o: CFLAGS += -I$(BUILD)/gen
+$(BUILD)/fuzz/obj/kernels/opencl/lsm_backend_cl.o: FUZZ_CFLAGS += -I$(BUILD)/gen
 
 $(BUILD)/liblsmorph.a: $(LIB_OBJ)
 	@rm -f $@

@@ -33,7 +33,7 @@
 #include <string.h>
 
 #include "io/lsm_io.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_status.h"
 
 /* ---- the data sets ------------------------------------------------------------ */
 

@@ -4,7 +4,7 @@
 #if defined(__linux__) && !defined(_GNU_SOURCE)
 #define _GNU_SOURCE /* renameat2 (glibc >= 2.28) */
 #endif
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <ctype.h>
 #include <dirent.h>

@@ -17,7 +17,7 @@
  *                from 1), values (string "sdf" or "mask"); pixelAspectRatio
  *                is sx / sy
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <OpenEXR/openexr.h>
 #include <errno.h>

@@ -20,7 +20,7 @@
  * text before the member (a prefix, rewritten in place at the end too) and
  * the member holds the samples only (no head).
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <errno.h>
 #include <stdlib.h>

@@ -1,5 +1,5 @@
 /* io_heights: the heights text file, one z value per slice. */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <errno.h>
 #include <math.h>

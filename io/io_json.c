@@ -1,6 +1,6 @@
 /* io_json: strings and numbers in the JSON that lsmorph writes (run.json, the
  * scores, volume.json). */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -8,7 +8,7 @@
  * in place at the end.  Offset is the centre of the first sample, as ITK and
  * VTK expect; the direction matrix is the identity.
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <stdio.h>
 

@@ -19,7 +19,7 @@
  * The length unit is left unknown (xyzt_units 0): lsmorph's unit is whatever
  * --pixel-size was given in.
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <string.h>
 

@@ -5,7 +5,7 @@
  * count 0) and the final one written by lsm_nrrd_finish, which seeks back to
  * offset 0 and rewrites it in place.
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <errno.h>
 #include <math.h>

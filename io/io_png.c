@@ -8,7 +8,7 @@
  * is needed after the jump (no clobbering issues); the caller then releases
  * everything and turns the recorded message into an lsm_status.
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <errno.h>
 #include <inttypes.h>

@@ -1,6 +1,6 @@
 /* io_raw: the JSON sidecar of volume.raw (headerless samples, x fastest, then
  * rows, then slices; float32 or uint8, little endian). */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <errno.h>
 #include <stdio.h>

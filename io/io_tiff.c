@@ -14,7 +14,7 @@
  * per file, never to stderr: the first error becomes the message of the
  * failure.
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <inttypes.h>
 #include <stdarg.h>

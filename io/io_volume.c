@@ -18,7 +18,7 @@
  * with a slice count have a fixed length: they are written with a provisional
  * count at open and rewritten in place by lsm_volume_writer_finish.
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <errno.h>
 #include <math.h>

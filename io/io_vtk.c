@@ -7,7 +7,7 @@
  * rewritten in place at the end; VTK's reader parses numbers with >>, which
  * skips the blanks.  ORIGIN is the centre of the first sample.
  */
-#include "lsm_io.h"
+#include "io/lsm_io.h"
 
 #include <stdio.h>
 

@@ -23,8 +23,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "../solver/lsm_grid.h"
-#include "../solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_status.h"
 
 /* ---- PNG ---------------------------------------------------------------- */
 

@@ -1,7 +1,7 @@
 /* lsm_cell.h — per-cell numerics of lsmorph, written once.
  *
  * Pure functions of plain values: no memory access patterns, no I/O, no
- * globals.  The scalar C path (solver/lsm_scheme.c, solver/lsm_reinit.c) and
+ * globals.  The scalar C path (solver/pde/lsm_scheme.c, solver/pde/lsm_reinit.c) and
  * the OpenCL kernels (kernels/ *.cl files) both include this file, so both run the
  * same arithmetic.  All quantities are float; lengths in physical units.
  *

@@ -2,7 +2,7 @@
  *
  * Pure functions of plain values, in the style of kernels/lsm_cell.h: no
  * memory access patterns, no I/O, no globals.  The scalar C path
- * (solver/lsm_particles.c) and the OpenCL kernels (kernels/morph.cl, which
+ * (solver/pde/lsm_particles.c) and the OpenCL kernels (kernels/morph.cl, which
  * the build splices this file into) both include it and call the same
  * functions, so both run the same arithmetic.
  *
@@ -185,8 +185,8 @@ LSM_FN float lsm_pcl_select(float phi_plus, float phi_minus) {
 }
 
 /* ---- Set constants, the node field, stages, strays -----------------------------------
- * Called by solver/lsm_particles.c (inside its vectorised loops) and by the
- * OpenCL path (kernels/morph.cl, kernels/lsm_backend_cl.c); each comment names
+ * Called by solver/pde/lsm_particles.c (inside its vectorised loops) and by the
+ * OpenCL path (kernels/morph.cl, kernels/opencl/lsm_backend_cl.c); each comment names
  * the C function that uses it. */
 
 /* Constants of a particle set on a dx x dy grid, as lsm_pls_create sets them:

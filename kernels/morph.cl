@@ -1,7 +1,7 @@
-/* morph.cl — the OpenCL kernels of lsmorph (host code: kernels/lsm_backend_cl.c).
+/* morph.cl — the OpenCL kernels of lsmorph (host code: kernels/opencl/lsm_backend_cl.c).
  *
  * One job per kernel, composed by the host in the same order as the C path
- * (solver/lsm_scheme.c, solver/lsm_reinit.c):
+ * (solver/pde/lsm_scheme.c, solver/pde/lsm_reinit.c):
  *   lsm_fill_ghosts    zero-gradient extension into the ghost ring
  *   lsm_stage_upwind   out = c0 u0 + c1 (in - dt Hhat(in)), Godunov upwind
  *   lsm_stage_roefix   the same with the Roe-Fix Hamiltonian (+-3 widened sets)
@@ -9,7 +9,7 @@
  *   lsm_cfl_partial    max of lsm_cfl_rate per work-group
  *   lsm_residual_partial  sum of (phi - phi_target)^2 per work-group
  *   lsm_reinit_step    one Russo–Smereka pseudo-time step
- * and the particle level set (solver/lsm_particles.c on the C path):
+ * and the particle level set (solver/pde/lsm_particles.c on the C path):
  *   lsm_pcl_velocity   the stage's node field F, grad phi (build_velocity)
  *   lsm_pcl_advect     one Runge–Kutta stage of every particle (lsm_pls_stage)
  *   lsm_pcl_detect     removal of flagged particles, escaped-particle detection,
@@ -24,7 +24,7 @@
  * Buffers hold whole grids, ghosts included, laid out as lsm_grid: row stride
  * `stride` = nx + 2 LSM_GHOST floats, cell (i, j) of the interior at
  * (j + LSM_GHOST) * stride + i + LSM_GHOST.  LSM_GHOST comes from the build
- * options (-DLSM_GHOST=4, the value in solver/lsm_grid.h).
+ * options (-DLSM_GHOST=4, the value in solver/base/lsm_grid.h).
  *
  * NDRanges are 2D over the interior (dimension 0 = column i, 1 = row j),
  * rounded up to whole work-groups: every kernel bounds-checks.  Offsets are
@@ -38,7 +38,7 @@
 #include "lsm_particle_cell.h"
 
 #ifndef LSM_GHOST
-#error "build with -DLSM_GHOST=<ghost width of solver/lsm_grid.h>"
+#error "build with -DLSM_GHOST=<ghost width of solver/base/lsm_grid.h>"
 #endif
 
 /* Offset of interior cell (i, j).  int arithmetic: the host refuses grids of
@@ -275,7 +275,7 @@ __kernel void lsm_residual_partial(__global const float *phi, __global const flo
  * Particles are structure-of-arrays buffers (x, y in cells; x0, y0 the
  * Runge–Kutta base; sign; radius; state), n of them, in the order the host
  * seeded them.  Removed particles are not compacted: their state says so and
- * every kernel skips them (the host counts them as solver/lsm_particles.c
+ * every kernel skips them (the host counts them as solver/pde/lsm_particles.c
  * does).  1D NDRanges over the particles rounded up to whole work-groups:
  * every kernel bounds-checks. */
 enum { LSM_PCL_LIVE = 0, LSM_PCL_LEFT = 1, LSM_PCL_DEAD = 2 };
@@ -313,7 +313,7 @@ __kernel void lsm_pcl_velocity(__global float4 *vel, __global const float *in,
 }
 
 /* x_out = c0 x_u0 + c1 (x + dt F N / h) per particle, F and grad phi
- * interpolated bilinearly from the node field (solver/lsm_particles.c:
+ * interpolated bilinearly from the node field (solver/pde/lsm_particles.c:
  * advect).  save_base: the step's first stage, which first records the
  * positions as the step's base x_u0 (lsm_pls_begin_step).  A particle that
  * leaves the domain is flagged (removed by the next lsm_pcl_detect) and

@@ -20,9 +20,9 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "solver/lsm_backend.h"
-#include "solver/lsm_morph.h"
-#include "solver/lsm_scheme.h"
+#include "solver/pde/lsm_backend.h"
+#include "solver/pde/lsm_morph.h"
+#include "solver/pde/lsm_scheme.h"
 
 static double now(void) {
   struct timespec ts;

@@ -9,7 +9,7 @@ trap 'rm -rf "$TMP"' EXIT INT TERM
 PY=/usr/bin/python3
 "$BUILD"/examples/gen_synthetic pyramid "$TMP/syn" >/dev/null
 mkdir -p "$TMP/bunny8" "$TMP/e4"
-for i in $(seq 1 8 120); do cp "../shared/data/bunny/$(printf %03d "$i").png" "$TMP/bunny8/" 2>/dev/null || true; done
+for i in $(seq 1 8 120); do cp "examples/data/bunny/$(printf %03d "$i").png" "$TMP/bunny8/" 2>/dev/null || true; done
 $PY tests/make_stack.py "$TMP/e60" 41 512
 for f in $(ls "$TMP/e60" | awk 'NR % 4 == 1'); do cp "$TMP/e60/$f" "$TMP/e4/"; done
 

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "solver/lsm_scheme.h"
+#include "solver/pde/lsm_scheme.h"
 
 static double now(void) {
   struct timespec ts;

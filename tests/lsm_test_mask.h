@@ -5,8 +5,8 @@
 
 #include "tests/lsm_test.h"
 
-#include "solver/lsm_grid.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_status.h"
 
 /* A w x h mask of zeros (fails the test if it cannot be had). */
 static inline lsm_mask lsm_test_mask(int w, int h) {

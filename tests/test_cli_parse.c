@@ -1,8 +1,8 @@
-/* The command line parsed into options (solver/lsm_cli.h): the defaults the
+/* The command line parsed into options (solver/app/lsm_cli.h): the defaults the
  * README's option table states, the --name=value form, and help topics. */
 #include "lsm_test.h"
 
-#include "../solver/lsm_cli.h"
+#include "solver/app/lsm_cli.h"
 
 static lsm_status parse(lsm_cli *cli, lsm_err *err, int argc, char **argv) {
   lsm_err_clear(err);
@@ -10,7 +10,7 @@ static lsm_status parse(lsm_cli *cli, lsm_err *err, int argc, char **argv) {
 }
 
 /* README: "--device N | first GPU, else first device"; -1 asks the OpenCL
- * backend for that search (kernels/lsm_backend_cl.c). */
+ * backend for that search (kernels/opencl/lsm_backend_cl.c). */
 static void test_reconstruct_defaults(void **state) {
   (void)state;
   char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out"};

@@ -1,10 +1,10 @@
-/* Tests of the end rule (solver/lsm_ends.h): how an object ends in a gap
+/* Tests of the end rule (solver/recon/lsm_ends.h): how an object ends in a gap
  * whose far side is an empty slice.  Sections are discs; the area of a
  * result is its count of cells with phi <= 0. */
 #include "tests/lsm_test_mask.h"
 
-#include "solver/lsm_ends.h"
-#include "solver/lsm_sdf.h"
+#include "solver/recon/lsm_ends.h"
+#include "solver/sdf/lsm_sdf.h"
 
 #define SIZE 96
 #define PI 3.14159265358979323846

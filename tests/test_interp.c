@@ -4,8 +4,8 @@
  * slices are recorded by an in-memory sink. */
 #include "tests/lsm_test.h"
 
-#include "solver/lsm_sdf.h"
-#include "solver/lsm_stack.h"
+#include "solver/sdf/lsm_sdf.h"
+#include "solver/recon/lsm_stack.h"
 
 /* ---- in-memory source: discs of given radii (a ball's cross-sections) ------------ */
 

@@ -1,10 +1,10 @@
-/* Tests for solver/lsm_metrics.c (what `lsmorph score` reports): every field
+/* Tests for solver/app/lsm_metrics.c (what `lsmorph score` reports): every field
  * of lsm_score_slice against a brute-force evaluation of the definitions in
  * lsm_metrics.h, on random masks of odd, non-square sizes that touch the
  * image border; the one-side-empty penalty; the nearest-rank quantile. */
 #include "tests/lsm_test_mask.h"
 
-#include "solver/lsm_metrics.h"
+#include "solver/app/lsm_metrics.h"
 
 /* Boundary by definition: an inside pixel on the image border or with a
  * 4-neighbour outside. */

@@ -28,12 +28,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "solver/lsm_backend.h"
-#include "solver/lsm_grid.h"
-#include "solver/lsm_morph.h"
-#include "solver/lsm_particles.h"
-#include "solver/lsm_scheme.h"
-#include "solver/lsm_status.h"
+#include "solver/pde/lsm_backend.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_morph.h"
+#include "solver/pde/lsm_particles.h"
+#include "solver/pde/lsm_scheme.h"
+#include "solver/base/lsm_status.h"
 
 typedef struct fixture {
   lsm_backend *cl;     /* NULL when no device could be opened */

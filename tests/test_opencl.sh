@@ -3,7 +3,7 @@
 #   sh tests/test_opencl.sh BUILD_DIR
 # Whole `lsmorph reconstruct` runs with --backend c and --backend opencl on
 # generated stacks (the candlestick set, masks; the pyramid set, outlines) and
-# on every 8th slice of the bunny (../shared/data/bunny, when present), with
+# on every 8th slice of the bunny (examples/data/bunny, when present), with
 # --method ls and --method pls, must agree within 1e-3 in every voxel of
 # volume.nrrd (and pls runs must report the same particle counters in
 # run.json); `lsmorph devices` lists a device; a missing device index fails
@@ -15,7 +15,7 @@ BUILD=${1:-build}
 LSM="$BUILD/lsmorph"
 GEN="$BUILD/examples/gen_synthetic"
 PY=/usr/bin/python3
-BUNNY=../shared/data/bunny
+BUNNY=examples/data/bunny
 TOL=1e-3
 SUITE=opencl
 . "$(dirname "$0")/harness.sh"

@@ -1,4 +1,4 @@
-/* Tests for solver/lsm_particles.c and kernels/lsm_particle_cell.h: seeding
+/* Tests for solver/pde/lsm_particles.c and kernels/lsm_particle_cell.h: seeding
  * (Algorithm 3.2), attraction and radii, advection with the front
  * (dt * F * N per step for Euler, RK2, RK3), the escaped-particle correction
  * of Algorithm 3.3 against hand-computed values, removal of particles that
@@ -7,9 +7,9 @@
 #include "tests/lsm_test.h"
 
 #include "kernels/lsm_particle_cell.h"
-#include "solver/lsm_grid.h"
-#include "solver/lsm_particles.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_particles.h"
+#include "solver/base/lsm_status.h"
 
 /* ------------------------------------------------------------------------ */
 /* helpers                                                                   */

@@ -1,9 +1,9 @@
-/* Tests for solver/lsm_parts.c: which parts of a slice count as moved. */
+/* Tests for solver/recon/lsm_parts.c: which parts of a slice count as moved. */
 #include "tests/lsm_test_mask.h"
 
-#include "solver/lsm_grid.h"
-#include "solver/lsm_parts.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/recon/lsm_parts.h"
+#include "solver/base/lsm_status.h"
 
 
 static int moved(const lsm_mask *a, const lsm_mask *b, lsm_part_move *mv) {

@@ -1,10 +1,10 @@
-/* Tests for solver/lsm_pchip.h: the PCHIP slopes against scipy's
+/* Tests for solver/recon/lsm_pchip.h: the PCHIP slopes against scipy's
  * PchipInterpolator (derivatives at the knots, uneven intervals, a local
  * extremum, the end rule and its 3 d clamp; values printed by scipy 1.10 with
  * %.17g), and the properties the z-profile relies on. */
 #include "tests/lsm_test.h"
 
-#include "solver/lsm_pchip.h"
+#include "solver/recon/lsm_pchip.h"
 
 typedef struct knots3 {
   double x[3], y[3];

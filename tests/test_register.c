@@ -1,10 +1,10 @@
-/* Tests for solver/lsm_register.c: mask overlap under a shift, and the
+/* Tests for solver/recon/lsm_register.c: mask overlap under a shift, and the
  * coarse-to-fine translation of largest overlap against brute force. */
 #include "tests/lsm_test_mask.h"
 
-#include "solver/lsm_grid.h"
-#include "solver/lsm_register.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/recon/lsm_register.h"
+#include "solver/base/lsm_status.h"
 
 
 static void paint_rect(lsm_mask *m, int x0, int y0, int x1, int y1) {

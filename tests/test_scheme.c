@@ -11,12 +11,12 @@
 #include "tests/lsm_test.h"
 
 #include "kernels/lsm_cell.h"
-#include "solver/lsm_grid.h"
-#include "solver/lsm_morph.h"
-#include "solver/lsm_reinit.h"
-#include "solver/lsm_scheme.h"
-#include "solver/lsm_sdf.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_morph.h"
+#include "solver/pde/lsm_reinit.h"
+#include "solver/pde/lsm_scheme.h"
+#include "solver/sdf/lsm_sdf.h"
+#include "solver/base/lsm_status.h"
 
 /* ------------------------------------------------------------------------ */
 /* helpers                                                                   */

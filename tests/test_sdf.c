@@ -1,10 +1,10 @@
-/* Tests for solver/lsm_sdf.c: exact distance transform, signed distance of
+/* Tests for solver/sdf/lsm_sdf.c: exact distance transform, signed distance of
  * masks and outlines, outline filling by parity, convex-hull centroid. */
 #include "tests/lsm_test.h"
 
-#include "solver/lsm_grid.h"
-#include "solver/lsm_sdf.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/sdf/lsm_sdf.h"
+#include "solver/base/lsm_status.h"
 
 #ifdef _OPENMP
 #include <omp.h>

@@ -1,14 +1,14 @@
-/* End-to-end tests of the stack driver (solver/lsm_stack.c) through an
+/* End-to-end tests of the stack driver (solver/recon/lsm_stack.c) through an
  * in-memory slice source (synthetic shapes) and a sink that records every
  * output slice: output heights, exact input slices, the cone of concentric
  * discs, topology changes (merge, split, vanish, appear), alignment of
  * disjoint slices, nested outline contours and the per-iteration mode. */
 #include "tests/lsm_test.h"
 
-#include "solver/lsm_grid.h"
-#include "solver/lsm_sdf.h"
-#include "solver/lsm_stack.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/sdf/lsm_sdf.h"
+#include "solver/recon/lsm_stack.h"
+#include "solver/base/lsm_status.h"
 
 #define PI 3.14159265358979323846
 

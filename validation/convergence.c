@@ -30,10 +30,10 @@
 #include <string.h>
 #include <time.h>
 
-#include "solver/lsm_grid.h"
-#include "solver/lsm_morph.h"
-#include "solver/lsm_scheme.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_morph.h"
+#include "solver/pde/lsm_scheme.h"
+#include "solver/base/lsm_status.h"
 #include "validation/vcsv.h"
 
 #define DOMAIN_HALF 32.0

@@ -15,7 +15,7 @@ the scores averaged over the offsets, per shape and method.
         [--methods ls,blend,pchip-mirror,pchip-zero,pchip-drop]
         [-- EXTRA LSMORPH OPTIONS]
 
-Shapes: the bunny (../shared/data/bunny, when present) and analytic solids on
+Shapes: the bunny (examples/data/bunny, when present) and analytic solids on
 128 x 128 slices, 100 slices tall (also smallball, tube, fork, torus: small,
 slanted and branching structures; taper, swim, vee: a narrowing slanted vessel,
 a thin ellipse that moves and turns, two tubes moving apart; branch: a straight

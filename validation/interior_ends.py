@@ -3,11 +3,11 @@ against the same object ending beside something that goes on.
 
 lsmorph ends a part of the object in two ways (README, method item 7):
   - alone: the whole section meets an empty slice, and the end rule of
-    solver/lsm_ends.c runs (the trend of the slices before, area caps, a
+    solver/recon/lsm_ends.c runs (the trend of the slices before, area caps, a
     section whole at mid-gap closing in a tip at the empty slice);
   - beside: the slice on the other side still holds something else, far away,
     and the part has no counterpart there; the halfway rule for components
-    (cap_unmatched in solver/lsm_stack.c) closes it by mid-gap, a paraboloid
+    (cap_unmatched in solver/recon/lsm_stack.c) closes it by mid-gap, a paraboloid
     cap, inside the ordinary morph and cubic.
 This script puts each analytic solid of end_offsets.py on a wider canvas,
 once alone and once with a bar in every slice, 90 px to its right (farther

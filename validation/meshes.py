@@ -1,7 +1,7 @@
 """Scanned meshes as test stacks: the Stanford bunny, the Stanford dragon, the
 Utah teapot and a brain's cortical surface (both hemispheres, MNI .obj) from
 their npm packages, voxelised at 128^3 the way
-../shared/data/bunny was made (ray parity along each axis, majority of the
+examples/data/bunny was made (ray parity along each axis, majority of the
 three), sliced along each of the three axes and cut to the object plus one
 empty slice at either end.  Every k-th slice is kept from the first (empty)
 one and the held-out slices up to the last kept one are scored with

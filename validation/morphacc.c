@@ -26,11 +26,11 @@
 #include <string.h>
 
 #include "io/lsm_io.h"
-#include "solver/lsm_grid.h"
-#include "solver/lsm_morph.h"
-#include "solver/lsm_scheme.h"
-#include "solver/lsm_sdf.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_morph.h"
+#include "solver/pde/lsm_scheme.h"
+#include "solver/sdf/lsm_sdf.h"
+#include "solver/base/lsm_status.h"
 #include "validation/vcsv.h"
 
 #define BAND 2.0

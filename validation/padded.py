@@ -1,5 +1,5 @@
 """The padded protocol: each shape cropped to its own extent plus one empty
-slice at either end (as the bunny in ../shared/data is cut), every k-th slice
+slice at either end (as the bunny in examples/data is cut), every k-th slice
 kept from the first (empty) one, the held-out slices up to the last kept one
 scored with `lsmorph score`.  The object then always starts one slice above an
 empty kept slice: the case where the end rule matters most.  Compare with

@@ -1,5 +1,5 @@
 /* slicescore: per-slice scores of result masks against truth masks, with the
- * same function `lsmorph score` uses (lsm_score_slice, solver/lsm_metrics.c),
+ * same function `lsmorph score` uses (lsm_score_slice, solver/app/lsm_metrics.c),
  * so the validation's per-slice curves and `lsmorph score`'s averages agree.
  *
  * Usage: slicescore LIST_FILE
@@ -18,9 +18,9 @@
 #include <string.h>
 
 #include "io/lsm_io.h"
-#include "solver/lsm_grid.h"
-#include "solver/lsm_metrics.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/app/lsm_metrics.h"
+#include "solver/base/lsm_status.h"
 
 typedef struct components {
   size_t count, stray, stray_pixels;

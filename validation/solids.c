@@ -28,8 +28,8 @@
 #include <string.h>
 
 #include "io/lsm_io.h"
-#include "solver/lsm_grid.h"
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_status.h"
 
 #define PI 3.14159265358979323846
 

@@ -101,7 +101,7 @@ def main():
             "excluded by VALIDATE_METHODS" if "pls" in s._choices("--method")
             else "this lsmorph has no PLS method yet"))
     s.md()
-    s.md("Scoring: `lsmorph score TRUTH OUT --stride K` (solver/lsmorph.c score(), per "
+    s.md("Scoring: `lsmorph score TRUTH OUT --stride K` (solver/app/lsmorph.c score(), per "
          "held-out slice `lsm_score_slice`): **Dice mean** over held-out slices (0 on a "
          "slice where exactly one side is empty), **Dice vol.** pooled over all held-out "
          "voxels, **MSD** mean symmetric surface distance and **HD95** 95th percentile of "

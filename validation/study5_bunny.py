@@ -22,7 +22,7 @@ def main():
     truth_dir = os.environ.get("LSMORPH_BUNNY", vlib.BUNNY_DIR)
     if not os.path.isdir(truth_dir):
         raise vlib.StepFailed("%s: no such folder; set LSMORPH_BUNNY to the folder of the 120 "
-                              "bunny slices (shared/data/bunny next to the repository)" % truth_dir)
+                              "bunny slices (examples/data/bunny in the repository)" % truth_dir)
     truth_files = vlib.list_pngs(truth_dir)
     if len(truth_files) < 20:
         raise vlib.StepFailed("%s: expected the 120 bunny slices, found %d" % (

@@ -5,7 +5,7 @@
 
 #include <stdio.h>
 
-#include "solver/lsm_status.h"
+#include "solver/base/lsm_status.h"
 
 static inline FILE *open_csv(const char *dir, const char *name, const char *header, lsm_err *err) {
   char path[4200];

@@ -29,7 +29,7 @@ import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BUNNY_DIR = os.path.join(os.path.dirname(ROOT), "shared", "data", "bunny")
+BUNNY_DIR = os.path.join(ROOT, "examples", "data", "bunny")
 
 
 METHOD_COLORS = {"ls": "tab:blue", "ls-opencl": "tab:cyan", "pls": "tab:green", "blend": "tab:orange",

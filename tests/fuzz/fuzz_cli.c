@@ -1,4 +1,4 @@
-/* libFuzzer harness for the command-line parser (lsm_cli_parse, solver/lsm_cli.c).
+/* libFuzzer harness for the command-line parser (lsm_cli_parse, solver/app/lsm_cli.c).
  *
  * The input is split at NUL bytes into arguments (at most 64), after a fixed
  * argv[0] "lsmorph".  Checks: every status is OK or a usage error with a
@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "solver/lsm_cli.h"
+#include "solver/app/lsm_cli.h"
 
 #define MAX_ARGS 64
 

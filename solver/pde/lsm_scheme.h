@@ -1,0 +1,85 @@
+/* lsm_scheme: one explicit step of the morph equation on a grid.
+ *
+ *   phi_t + F |grad phi| = 0,   F = phi - phi_target         (METHOD.md §2)
+ *
+ * Spatial schemes (numerical Hamiltonians, per cell in kernels/lsm_cell.h) and
+ * TVD Runge–Kutta integrators (Shu & Osher 1988) are chosen by enums; the
+ * dispatch happens once per sweep, outside the cell loops.  Grids carry a
+ * ghost layer that these functions fill (zero-gradient boundary).
+ */
+#ifndef LSM_SCHEME_H
+#define LSM_SCHEME_H
+
+#include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_status.h"
+
+/* Add new items at the end of each list. */
+typedef enum lsm_scheme {
+  LSM_SCHEME_UNKNOWN = -1,
+  LSM_SCHEME_UPWIND,  /* first-order Godunov upwind */
+  LSM_SCHEME_ROEFIX,  /* Roe-Fix, Algorithm 3.1 of the design document */
+  LSM_SCHEME_WENO5,   /* fifth-order HJ-WENO derivatives, Godunov Hamiltonian */
+  LSM_SCHEME_COUNT
+} lsm_scheme;
+
+typedef enum lsm_time {
+  LSM_TIME_UNKNOWN = -1,
+  LSM_TIME_EULER, /* forward Euler */
+  LSM_TIME_RK2,   /* TVD Runge–Kutta 2 (Heun) */
+  LSM_TIME_RK3,   /* TVD Runge–Kutta 3 (Shu–Osher) */
+  LSM_TIME_COUNT
+} lsm_time;
+
+const char *lsm_scheme_name(lsm_scheme scheme);
+lsm_scheme lsm_scheme_from_name(const char *name);
+const char *lsm_time_name(lsm_time time);
+lsm_time lsm_time_from_name(const char *name);
+/* Number of Hamiltonian evaluations per cell and step (1, 2, 3). */
+int lsm_time_stages(lsm_time time);
+
+/* The CFL step dt = cfl / max over cells of the scheme's rate (METHOD.md §3.4;
+ * kernels/lsm_cell.h, lsm_cfl_rate_of): upwind, |H1|/dx + |H2|/dy on the four
+ * one-sided gradient combinations; Roe-Fix, |F| (1/dx + 1/dy), which bounds its
+ * Lax–Friedrichs dissipation; WENO5, upwind's.  Monotone for cfl <= 1 (upwind,
+ * Roe-Fix; WENO5 is not monotone).  Fills phi's ghosts.
+ * When the rate is 0 everywhere (phi == phi_target) *dt = +INFINITY. */
+void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
+                int threads, double *dt);
+
+/* One Shu–Osher stage:  out = c0 * u0 + c1 * (in - dt * Hhat(in)).
+ * out may alias u0 (cell-wise), never in.  Fills in's ghosts. */
+void lsm_scheme_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
+                      const lsm_grid *phi_target, float c0, float c1, float dt, int threads);
+
+/* Working storage for the integrators (two scratch grids). */
+typedef struct lsm_stepper lsm_stepper;
+lsm_status lsm_stepper_create(const lsm_grid *like, lsm_stepper **out, lsm_err *err);
+void lsm_stepper_destroy(lsm_stepper **stepper);
+
+/* Advances phi by one step of size dt with the given scheme and integrator. */
+void lsm_step(lsm_stepper *stepper, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
+              const lsm_grid *phi_target, float dt, int threads);
+
+/* Called before each Runge–Kutta stage out = c0 u0 + c1 (in - dt Hhat(in))
+ * with that stage's input field, so Lagrangian particles can take the same
+ * stage (lsm_pls_stage). */
+typedef struct lsm_stage_hook {
+  void *ctx;
+  void (*stage)(void *ctx, const lsm_grid *in, const lsm_grid *phi_target, float c0, float c1,
+                float dt);
+} lsm_stage_hook;
+
+/* lsm_step with a stage hook (may be NULL). */
+void lsm_step_hooked(lsm_stepper *stepper, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
+                     const lsm_grid *phi_target, float dt, int threads,
+                     const lsm_stage_hook *hook);
+
+/* ||a - b||_2 over the interior (Frobenius norm, physical units), summed in
+ * double row by row and then in row order, so the value does not depend on
+ * the thread count. */
+double lsm_grid_diff_norm(const lsm_grid *a, const lsm_grid *b, int threads);
+
+/* 1 if every interior value is finite. */
+int lsm_grid_all_finite(const lsm_grid *g, int threads);
+
+#endif

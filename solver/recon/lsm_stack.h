@@ -1,0 +1,255 @@
+/* lsm_stack: the stack driver.  Walks the input slices in height order, morphs
+ * (or blends) each consecutive pair, and hands every output slice to a sink,
+ * one at a time: at most the current pair and its working grids are in memory.
+ *
+ * Output heights (default mode): the regular grid z0, z0 + dz, ... up to the
+ * last input height.  An output height on an input height gets that input
+ * slice exactly; a height a fraction s of the way through a gap gets the morph
+ * at time t(s) = -ln(1 - s) (lsm_morph_time_of_fraction), or the blend
+ * (1 - s) phi_A + s phi_B.
+ * Per-iteration mode (the document's, §3.6–3.8): every solver iteration of a
+ * pair is a slice, at heights linspace(z_A, z_B, k + 2).
+ *
+ * Alignment (§3.2, §3.9): each slice of a pair is shifted by whole pixels so
+ * the centroid of the convex hull of its foreground sits at the image centre,
+ * on a canvas padded so nothing is clipped; an intermediate slice at fraction
+ * s is shifted back by (1 - s) d_A + s d_B (bilinear resampling of phi), so
+ * centroids travel on the straight segment between the two slices' (or on the
+ * monotone cubic through the neighbouring slices' centroids, --interp cubic).
+ * Auto alignment (the default) applies this to a pair only when its shape
+ * moved: the two overlap little in place (IoU < 1/2), shifting the source by
+ * the centroid difference makes it overlap the target more, the translation
+ * of largest overlap (lsm_register) lies nearer the centroid difference than
+ * no shift, and either the two barely touch in place (overlap < 1/10 of the
+ * smaller) and that translation makes them somewhat alike (IoU >= 1/4), or it
+ * makes them alike (IoU >= 1/2 and 1.5 times the IoU in place).  A pair whose
+ * shape changed (a branch or an ear growing out moves the centroid without
+ * moving the object; a narrow part next to a wide body fits inside it at many
+ * shifts; a small part ends while a large one begins elsewhere) is not
+ * aligned.
+ *
+ * Moving parts (ls and pls, mask input, unaligned pairs): components that
+ * moved off their place by the next slice, paired by lsm_parts, are taken
+ * out of the morph; each pair travels the straight line between its centres
+ * as the blend of its two parts moved to the same place, joined to the rest
+ * by the minimum.
+ *
+ * Empty slices: the object is absent there.  Next to a non-empty slice A the
+ * object keeps A's section at most up to mid-gap.  With the linear profile it
+ * ends there (a paraboloid cap for ls and pls, the zero set of
+ * (1-s) phi_A + s R for the blend, R the depth of A's deepest point; per
+ * iteration the morph toward the constant R / ln 2).  With the cubic profile
+ * the end follows the trend of the slices before A, and a section still whole
+ * at mid-gap closes in a tip at the empty slice (lsm_ends.h; README, method
+ * item 7).
+ */
+#ifndef LSM_STACK_H
+#define LSM_STACK_H
+
+#include <float.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_morph.h"
+#include "solver/base/lsm_status.h"
+
+/* The lengths a run accepts (pixel size, dz, the height between two input
+ * slices), in any one unit: the solver holds them and the signed distances
+ * in single-precision floats, whose products under- or overflow outside this
+ * range (a pixel size of 1e36 changed the result, 1e-40 blew up the morph).
+ * Inside it the result does not depend on the unit: scaling every length by
+ * 2^64 or 2^-80 gives the same slices (tests/test_cli.sh). */
+#define LSM_LENGTH_MIN 1e-30
+#define LSM_LENGTH_MAX 1e30
+
+/* Whether a length lies in that range (false for NaN). */
+static inline int lsm_length_in_range(double v) {
+  return v >= LSM_LENGTH_MIN && v <= LSM_LENGTH_MAX;
+}
+
+/* Whether output heights a step apart stay distinct doubles at heights up to
+ * z_mag in size: at least 8 units in the last place (a smaller step repeats
+ * heights in heights.txt, the mesh and the previews). */
+static inline int lsm_output_step_resolved(double step, double z_mag) {
+  return step >= 8.0 * DBL_EPSILON * z_mag;
+}
+
+/* Add new items at the end of each list. */
+typedef enum lsm_method {
+  LSM_METHOD_UNKNOWN = -1,
+  LSM_METHOD_LS,    /* level-set morph */
+  LSM_METHOD_BLEND, /* linear interpolation of the two signed distances */
+  LSM_METHOD_PLS,   /* level-set morph with the particle level set correction */
+  LSM_METHOD_COUNT
+} lsm_method;
+
+typedef enum lsm_input_kind {
+  LSM_INPUT_UNKNOWN = -1,
+  LSM_INPUT_MASK,    /* filled regions */
+  LSM_INPUT_OUTLINE, /* thin closed contours, inside by parity */
+  LSM_INPUT_COUNT
+} lsm_input_kind;
+
+typedef enum lsm_align {
+  LSM_ALIGN_UNKNOWN = -1,
+  LSM_ALIGN_HULL, /* convex-hull centroid to the image centre */
+  LSM_ALIGN_NONE,
+  LSM_ALIGN_AUTO, /* hull for a pair only when its shape moved (see above) */
+  LSM_ALIGN_COUNT
+} lsm_align;
+
+const char *lsm_method_name(lsm_method m);
+lsm_method lsm_method_from_name(const char *name);
+const char *lsm_input_name(lsm_input_kind k);
+lsm_input_kind lsm_input_from_name(const char *name);
+const char *lsm_align_name(lsm_align a);
+lsm_align lsm_align_from_name(const char *name);
+
+typedef enum lsm_interp {
+  LSM_INTERP_UNKNOWN = -1,
+  LSM_INTERP_LINEAR, /* each gap from its two slices only */
+  LSM_INTERP_CUBIC,  /* monotone cubic (PCHIP) through the four nearest slices */
+  LSM_INTERP_COUNT
+} lsm_interp;
+
+const char *lsm_interp_name(lsm_interp i);
+lsm_interp lsm_interp_from_name(const char *name);
+
+/* How the cubic profile ends an object at an empty slice (README, method
+ * item 7); the linear profile always ends it at mid-gap. */
+typedef enum lsm_end_rule {
+  LSM_ENDS_UNKNOWN = -1,
+  LSM_ENDS_TIP,     /* whole or narrowing up to mid-gap, then a tip closing at the empty slice */
+  LSM_ENDS_HALFWAY, /* the same up to mid-gap, nothing past it */
+  LSM_ENDS_AUTO,    /* tip where the empty slice is the first or last input slice (a stack
+                     * cut one slice beyond the object), halfway where more slices lie beyond
+                     * it (a scan that covers more than the object) */
+  LSM_ENDS_COUNT
+} lsm_end_rule;
+
+const char *lsm_end_rule_name(lsm_end_rule e);
+lsm_end_rule lsm_end_rule_from_name(const char *name);
+
+typedef struct lsm_stack_opts {
+  lsm_method method;
+  lsm_input_kind input;
+  lsm_align align;
+  lsm_interp interp;   /* z-profile (default cubic) */
+  lsm_end_rule ends;   /* how the cubic profile ends an object (default auto) */
+  double pixel_dx;     /* physical width of a pixel: the step along a row, x (default 1) */
+  double pixel_dy;     /* physical height of a pixel: the step down a column, y (default 1) */
+  double dz;           /* output slice spacing; <= 0 means the smaller of pixel_dx, pixel_dy */
+  int per_iteration;   /* the document's output mode */
+  double tol;          /* CP threshold (per-iteration mode, default 0.25) */
+  int max_iter;        /* most solver steps per pair (default 100000) */
+  lsm_morph_opts morph;
+  const struct lsm_gap_transport *transport; /* NULL: one process (see below) */
+} lsm_stack_opts;
+
+void lsm_stack_opts_default(lsm_stack_opts *opts);
+
+/* The options a run actually uses: per_iteration (the design document's mode)
+ * takes the linear profile, whatever interp says, and the linear profile ends
+ * an object at mid-gap, whatever ends says (recorded as halfway).
+ * lsm_stack_run applies this to its own copy; callers that record the options
+ * (run.json) apply it first. */
+void lsm_stack_opts_resolve(lsm_stack_opts *opts);
+
+/* Where input slices come from (the CLI reads PNG files; tests synthesise). */
+typedef struct lsm_slice_source {
+  void *ctx;
+  size_t count;       /* number of slices (>= 2) */
+  const double *z;    /* their heights, strictly increasing */
+  /* Loads slice `index` as read (an outline or a mask, per opts.input). */
+  lsm_status (*load)(void *ctx, size_t index, lsm_mask *out, lsm_err *err);
+  /* A name for messages (a file name); may be NULL. */
+  const char *(*name)(void *ctx, size_t index);
+} lsm_slice_source;
+
+/* Where output slices go.  phi is width*height floats, row-major, physical
+ * units, negative inside; input_index is the input slice it reproduces or -1. */
+typedef struct lsm_slice_sink {
+  void *ctx;
+  lsm_status (*emit)(void *ctx, const float *phi, int width, int height, double z,
+                     long input_index, lsm_err *err);
+} lsm_slice_sink;
+
+/* What happened in one gap; the CLI writes these to run.json. */
+typedef struct lsm_pair_stats {
+  size_t source, target;  /* input indices */
+  int iterations;         /* solver steps taken */
+  double dt;              /* step size (the fixed CFL step) */
+  double cp;              /* CP of the last step (0 if no step) */
+  double t_final;         /* morph time reached */
+  double seconds;         /* solver time for the pair */
+  long long cells;        /* grid cells updated per iteration */
+  size_t slices;          /* intermediate slices emitted */
+  int hit_max_iter;       /* 1 if max_iter stopped the pair early */
+  int aligned;            /* 1 if the pair was hull-aligned (--align hull, or chosen by auto),
+                             or the object ends in the gap moving with the aligned pair beyond */
+  int moving_parts;       /* parts that moved off their place, morphed on their own (lsm_parts) */
+  /* --method pls (both morphs of a two-sided pair added up) */
+  long long pls_seeded;     /* particles seeded */
+  long long pls_discarded;  /* dropped by attraction (and leaving the grid) */
+  long long pls_escaped;    /* escaped particles, summed over steps */
+  long long pls_corrected;  /* grid values changed by corrections */
+  long long pls_steps;      /* corrections made (steps) */
+  int rank;                 /* the process (MPI rank) that ran the gap; 0 without MPI */
+} lsm_pair_stats;
+
+/* A finished gap on its way to the writing process: its output slices in
+ * order (phi: count * width * height floats), its statistics, or its error. */
+typedef struct lsm_gap_result {
+  lsm_status status;
+  char msg[LSM_ERR_MSG_MAX];
+  size_t count;
+  size_t cap;     /* slices allocated (while buffering) */
+  size_t reserve; /* slices expected, allocated at once (0: unknown, grown by doubling) */
+  int width, height;
+  float *phi;
+  double *z;
+  long *input;
+  lsm_pair_stats stats;
+} lsm_gap_result;
+
+void lsm_gap_result_free(lsm_gap_result *g);
+
+/* Spreading the gaps over processes.  Gap i is computed by rank i % size;
+ * rank 0 computes its own gaps and receives the others' in stack order, and
+ * only rank 0 writes, so the output is the one a single process writes, byte
+ * for byte.  Implemented with MPI in solver/app/lsm_mpi.c (make MPI=1). */
+typedef struct lsm_gap_transport {
+  void *ctx;
+  int rank, size;
+  /* rank != 0: hands gap `gap` (or its error) to rank 0 */
+  lsm_status (*send)(void *ctx, size_t gap, const lsm_gap_result *result, lsm_err *err);
+  /* rank 0: receives gap `gap` from rank `from` into *result (allocated; free
+   * with lsm_gap_result_free) */
+  lsm_status (*recv)(void *ctx, size_t gap, int from, lsm_gap_result *result, lsm_err *err);
+} lsm_gap_transport;
+
+typedef struct lsm_progress {
+  void *ctx;
+  /* Called after each output slice: done of total (total 0 when unknown). */
+  void (*update)(void *ctx, size_t done, size_t total, size_t pair, size_t pairs);
+} lsm_progress;
+
+/* The output slice spacing of default mode: --dz, or when it is not set the
+ * pixel size (isotropic voxels; the smaller side of a pixel that is not
+ * square, so that z is sampled as finely as the finer in-plane axis). */
+double lsm_stack_output_dz(const lsm_stack_opts *opts);
+
+/* Number of output slices in default mode: the heights z[0] + k dz up to
+ * the last input height (within a millionth of dz or of the closest pair of
+ * input heights).  At least LSM_OUTPUT_COUNT_MAX is returned as that. */
+#define LSM_OUTPUT_COUNT_MAX (SIZE_MAX / 2)
+size_t lsm_stack_output_count(const double *z, size_t count, double dz);
+
+/* Runs the whole stack.  stats has source->count - 1 entries.  progress may
+ * be NULL. */
+lsm_status lsm_stack_run(const lsm_slice_source *source, int width, int height,
+                         const lsm_stack_opts *opts, const lsm_slice_sink *sink,
+                         lsm_pair_stats *stats, const lsm_progress *progress, lsm_err *err);
+
+#endif
