@@ -22,16 +22,19 @@
 #include <stdio.h>
 
 #include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_names.h"
 #include "solver/pde/lsm_particles.h"
 #include "solver/pde/lsm_scheme.h"
 #include "solver/base/lsm_status.h"
 
-/* Add new items at the end. */
+/* Add new items at the end (lsm_names.h). */
+#define LSM_BACKEND_LIST(X)                                                     \
+  X(LSM_BACKEND_C, "c")           /* scalar C path, OpenMP threads */           \
+  X(LSM_BACKEND_OPENCL, "opencl") /* OpenCL device (PoCL on CPUs, GPUs) */      \
+  X(LSM_BACKEND_AUTO, "auto")     /* OpenCL when a device is present, else C */
 typedef enum lsm_backend_kind {
   LSM_BACKEND_UNKNOWN = -1,
-  LSM_BACKEND_C,      /* scalar C path, OpenMP threads */
-  LSM_BACKEND_OPENCL, /* OpenCL device (PoCL on CPUs, GPUs) */
-  LSM_BACKEND_AUTO,   /* OpenCL when a device is present, else C */
+  LSM_BACKEND_LIST(LSM_ENUM_ITEM)
   LSM_BACKEND_COUNT
 } lsm_backend_kind;
 

@@ -109,17 +109,8 @@ const lsm_backend_ops *lsm_backend_c_ops(void) { return &c_ops; }
 
 /* ---- opening a backend ---------------------------------------------------------- */
 
-static const char *const kind_names[LSM_BACKEND_COUNT] = {"c", "opencl", "auto"};
-
-const char *lsm_backend_kind_name(lsm_backend_kind kind) {
-  return kind > LSM_BACKEND_UNKNOWN && kind < LSM_BACKEND_COUNT ? kind_names[kind] : "unknown";
-}
-
-lsm_backend_kind lsm_backend_kind_from_name(const char *name) {
-  for (int k = 0; k < LSM_BACKEND_COUNT; ++k)
-    if (name && strcmp(name, kind_names[k]) == 0) return (lsm_backend_kind)k;
-  return LSM_BACKEND_UNKNOWN;
-}
+LSM_NAME_FUNCTIONS(lsm_backend_kind, LSM_BACKEND_LIST, lsm_backend_kind_name,
+                   lsm_backend_kind_from_name)
 
 lsm_status lsm_backend_open(lsm_backend_kind kind, int device, int threads, lsm_backend **out,
                             lsm_err *err) {

@@ -6,28 +6,8 @@
 
 #include "kernels/lsm_cell.h"
 
-static const char *const scheme_names[LSM_SCHEME_COUNT] = {"upwind", "roe-fix", "weno5"};
-static const char *const time_names[LSM_TIME_COUNT] = {"euler", "rk2", "rk3"};
-
-const char *lsm_scheme_name(lsm_scheme scheme) {
-  return scheme > LSM_SCHEME_UNKNOWN && scheme < LSM_SCHEME_COUNT ? scheme_names[scheme] : "unknown";
-}
-
-lsm_scheme lsm_scheme_from_name(const char *name) {
-  for (int k = 0; k < LSM_SCHEME_COUNT; ++k)
-    if (name && strcmp(name, scheme_names[k]) == 0) return (lsm_scheme)k;
-  return LSM_SCHEME_UNKNOWN;
-}
-
-const char *lsm_time_name(lsm_time time) {
-  return time > LSM_TIME_UNKNOWN && time < LSM_TIME_COUNT ? time_names[time] : "unknown";
-}
-
-lsm_time lsm_time_from_name(const char *name) {
-  for (int k = 0; k < LSM_TIME_COUNT; ++k)
-    if (name && strcmp(name, time_names[k]) == 0) return (lsm_time)k;
-  return LSM_TIME_UNKNOWN;
-}
+LSM_NAME_FUNCTIONS(lsm_scheme, LSM_SCHEME_LIST, lsm_scheme_name, lsm_scheme_from_name)
+LSM_NAME_FUNCTIONS(lsm_time, LSM_TIME_LIST, lsm_time_name, lsm_time_from_name)
 
 int lsm_time_stages(lsm_time time) {
   return time == LSM_TIME_RK3 ? 3 : time == LSM_TIME_RK2 ? 2 : 1;

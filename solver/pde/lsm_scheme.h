@@ -11,22 +11,27 @@
 #define LSM_SCHEME_H
 
 #include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_names.h"
 #include "solver/base/lsm_status.h"
 
-/* Add new items at the end of each list. */
+/* Add new items at the end of each list (lsm_names.h). */
+#define LSM_SCHEME_LIST(X)                                                      \
+  X(LSM_SCHEME_UPWIND, "upwind")  /* first-order Godunov upwind */              \
+  X(LSM_SCHEME_ROEFIX, "roe-fix") /* Roe-Fix, Algorithm 3.1 of the design document */ \
+  X(LSM_SCHEME_WENO5, "weno5")    /* fifth-order HJ-WENO derivatives, Godunov Hamiltonian */
 typedef enum lsm_scheme {
   LSM_SCHEME_UNKNOWN = -1,
-  LSM_SCHEME_UPWIND,  /* first-order Godunov upwind */
-  LSM_SCHEME_ROEFIX,  /* Roe-Fix, Algorithm 3.1 of the design document */
-  LSM_SCHEME_WENO5,   /* fifth-order HJ-WENO derivatives, Godunov Hamiltonian */
+  LSM_SCHEME_LIST(LSM_ENUM_ITEM)
   LSM_SCHEME_COUNT
 } lsm_scheme;
 
+#define LSM_TIME_LIST(X)                                                        \
+  X(LSM_TIME_EULER, "euler") /* forward Euler */                                \
+  X(LSM_TIME_RK2, "rk2")     /* TVD Runge–Kutta 2 (Heun) */                     \
+  X(LSM_TIME_RK3, "rk3")     /* TVD Runge–Kutta 3 (Shu–Osher) */
 typedef enum lsm_time {
   LSM_TIME_UNKNOWN = -1,
-  LSM_TIME_EULER, /* forward Euler */
-  LSM_TIME_RK2,   /* TVD Runge–Kutta 2 (Heun) */
-  LSM_TIME_RK3,   /* TVD Runge–Kutta 3 (Shu–Osher) */
+  LSM_TIME_LIST(LSM_ENUM_ITEM)
   LSM_TIME_COUNT
 } lsm_time;
 

@@ -17,49 +17,11 @@
 
 /* ---- names ------------------------------------------------------------------------ */
 
-static const char *const method_names[LSM_METHOD_COUNT] = {"ls", "blend", "pls"};
-static const char *const input_names[LSM_INPUT_COUNT] = {"mask", "outline"};
-static const char *const align_names[LSM_ALIGN_COUNT] = {"hull", "none", "auto"};
-static const char *const interp_names[LSM_INTERP_COUNT] = {"linear", "cubic"};
-static const char *const end_rule_names[LSM_ENDS_COUNT] = {"tip", "halfway", "auto"};
-
-static int name_index(const char *const *names, int count, const char *name) {
-  for (int k = 0; k < count; ++k)
-    if (name && strcmp(name, names[k]) == 0) return k;
-  return -1;
-}
-
-const char *lsm_method_name(lsm_method m) {
-  return m > LSM_METHOD_UNKNOWN && m < LSM_METHOD_COUNT ? method_names[m] : "unknown";
-}
-lsm_method lsm_method_from_name(const char *name) {
-  return (lsm_method)name_index(method_names, LSM_METHOD_COUNT, name);
-}
-const char *lsm_input_name(lsm_input_kind k) {
-  return k > LSM_INPUT_UNKNOWN && k < LSM_INPUT_COUNT ? input_names[k] : "unknown";
-}
-lsm_input_kind lsm_input_from_name(const char *name) {
-  return (lsm_input_kind)name_index(input_names, LSM_INPUT_COUNT, name);
-}
-const char *lsm_align_name(lsm_align a) {
-  return a > LSM_ALIGN_UNKNOWN && a < LSM_ALIGN_COUNT ? align_names[a] : "unknown";
-}
-lsm_align lsm_align_from_name(const char *name) {
-  return (lsm_align)name_index(align_names, LSM_ALIGN_COUNT, name);
-}
-
-const char *lsm_interp_name(lsm_interp i) {
-  return i > LSM_INTERP_UNKNOWN && i < LSM_INTERP_COUNT ? interp_names[i] : "unknown";
-}
-lsm_interp lsm_interp_from_name(const char *name) {
-  return (lsm_interp)name_index(interp_names, LSM_INTERP_COUNT, name);
-}
-const char *lsm_end_rule_name(lsm_end_rule e) {
-  return e > LSM_ENDS_UNKNOWN && e < LSM_ENDS_COUNT ? end_rule_names[e] : "unknown";
-}
-lsm_end_rule lsm_end_rule_from_name(const char *name) {
-  return (lsm_end_rule)name_index(end_rule_names, LSM_ENDS_COUNT, name);
-}
+LSM_NAME_FUNCTIONS(lsm_method, LSM_METHOD_LIST, lsm_method_name, lsm_method_from_name)
+LSM_NAME_FUNCTIONS(lsm_input_kind, LSM_INPUT_LIST, lsm_input_name, lsm_input_from_name)
+LSM_NAME_FUNCTIONS(lsm_align, LSM_ALIGN_LIST, lsm_align_name, lsm_align_from_name)
+LSM_NAME_FUNCTIONS(lsm_interp, LSM_INTERP_LIST, lsm_interp_name, lsm_interp_from_name)
+LSM_NAME_FUNCTIONS(lsm_end_rule, LSM_ENDS_LIST, lsm_end_rule_name, lsm_end_rule_from_name)
 
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
   memset(opts, 0, sizeof *opts);

@@ -51,6 +51,7 @@
 #include <stdint.h>
 
 #include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_names.h"
 #include "solver/pde/lsm_morph.h"
 #include "solver/base/lsm_status.h"
 
@@ -75,27 +76,33 @@ static inline int lsm_output_step_resolved(double step, double z_mag) {
   return step >= 8.0 * DBL_EPSILON * z_mag;
 }
 
-/* Add new items at the end of each list. */
+/* Add new items at the end of each list (lsm_names.h). */
+#define LSM_METHOD_LIST(X)                                                      \
+  X(LSM_METHOD_LS, "ls")       /* level-set morph */                            \
+  X(LSM_METHOD_BLEND, "blend") /* linear interpolation of the two signed distances */ \
+  X(LSM_METHOD_PLS, "pls")     /* level-set morph with the particle level set correction */
 typedef enum lsm_method {
   LSM_METHOD_UNKNOWN = -1,
-  LSM_METHOD_LS,    /* level-set morph */
-  LSM_METHOD_BLEND, /* linear interpolation of the two signed distances */
-  LSM_METHOD_PLS,   /* level-set morph with the particle level set correction */
+  LSM_METHOD_LIST(LSM_ENUM_ITEM)
   LSM_METHOD_COUNT
 } lsm_method;
 
+#define LSM_INPUT_LIST(X)                                                       \
+  X(LSM_INPUT_MASK, "mask")       /* filled regions */                          \
+  X(LSM_INPUT_OUTLINE, "outline") /* thin closed contours, inside by parity */
 typedef enum lsm_input_kind {
   LSM_INPUT_UNKNOWN = -1,
-  LSM_INPUT_MASK,    /* filled regions */
-  LSM_INPUT_OUTLINE, /* thin closed contours, inside by parity */
+  LSM_INPUT_LIST(LSM_ENUM_ITEM)
   LSM_INPUT_COUNT
 } lsm_input_kind;
 
+#define LSM_ALIGN_LIST(X)                                                       \
+  X(LSM_ALIGN_HULL, "hull") /* convex-hull centroid to the image centre */      \
+  X(LSM_ALIGN_NONE, "none")                                                     \
+  X(LSM_ALIGN_AUTO, "auto") /* hull for a pair only when its shape moved (see above) */
 typedef enum lsm_align {
   LSM_ALIGN_UNKNOWN = -1,
-  LSM_ALIGN_HULL, /* convex-hull centroid to the image centre */
-  LSM_ALIGN_NONE,
-  LSM_ALIGN_AUTO, /* hull for a pair only when its shape moved (see above) */
+  LSM_ALIGN_LIST(LSM_ENUM_ITEM)
   LSM_ALIGN_COUNT
 } lsm_align;
 
@@ -106,10 +113,12 @@ lsm_input_kind lsm_input_from_name(const char *name);
 const char *lsm_align_name(lsm_align a);
 lsm_align lsm_align_from_name(const char *name);
 
+#define LSM_INTERP_LIST(X)                                                      \
+  X(LSM_INTERP_LINEAR, "linear") /* each gap from its two slices only */        \
+  X(LSM_INTERP_CUBIC, "cubic")   /* monotone cubic (PCHIP) through the four nearest slices */
 typedef enum lsm_interp {
   LSM_INTERP_UNKNOWN = -1,
-  LSM_INTERP_LINEAR, /* each gap from its two slices only */
-  LSM_INTERP_CUBIC,  /* monotone cubic (PCHIP) through the four nearest slices */
+  LSM_INTERP_LIST(LSM_ENUM_ITEM)
   LSM_INTERP_COUNT
 } lsm_interp;
 
@@ -118,13 +127,18 @@ lsm_interp lsm_interp_from_name(const char *name);
 
 /* How the cubic profile ends an object at an empty slice (README, method
  * item 7); the linear profile always ends it at mid-gap. */
+/* tip: whole or narrowing up to mid-gap, then a tip closing at the empty slice;
+ * halfway: the same up to mid-gap, nothing past it; auto: tip where the empty
+ * slice is the first or last input slice (a stack cut one slice beyond the
+ * object), halfway where more slices lie beyond it (a scan that covers more
+ * than the object). */
+#define LSM_ENDS_LIST(X)                                                        \
+  X(LSM_ENDS_TIP, "tip")                                                        \
+  X(LSM_ENDS_HALFWAY, "halfway")                                                \
+  X(LSM_ENDS_AUTO, "auto")
 typedef enum lsm_end_rule {
   LSM_ENDS_UNKNOWN = -1,
-  LSM_ENDS_TIP,     /* whole or narrowing up to mid-gap, then a tip closing at the empty slice */
-  LSM_ENDS_HALFWAY, /* the same up to mid-gap, nothing past it */
-  LSM_ENDS_AUTO,    /* tip where the empty slice is the first or last input slice (a stack
-                     * cut one slice beyond the object), halfway where more slices lie beyond
-                     * it (a scan that covers more than the object) */
+  LSM_ENDS_LIST(LSM_ENUM_ITEM)
   LSM_ENDS_COUNT
 } lsm_end_rule;
 
