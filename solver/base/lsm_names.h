@@ -1,12 +1,13 @@
 /* lsm_names: an enum and its names from one list.
  *
- * Each option enum is written once as an X-macro list of (identifier, name):
+ * Each option enum is written once as an X-macro list of (identifier, name),
+ * declared with its name functions in a header:
  *
  *   #define LSM_SCHEME_LIST(X) X(LSM_SCHEME_UPWIND, "upwind") X(LSM_SCHEME_ROEFIX, "roe-fix")
- *   typedef enum lsm_scheme { LSM_SCHEME_UNKNOWN = -1, LSM_SCHEME_LIST(LSM_ENUM_ITEM)
- *                             LSM_SCHEME_COUNT } lsm_scheme;
+ *   LSM_ENUM(lsm_scheme, LSM_SCHEME, LSM_SCHEME_LIST, lsm_scheme_name, lsm_scheme_from_name);
  *
- * and one line in a .c file defines its name <-> value functions:
+ * which gives LSM_SCHEME_UNKNOWN (-1), the listed values and LSM_SCHEME_COUNT;
+ * one line in a .c file defines the name <-> value functions:
  *
  *   LSM_NAME_FUNCTIONS(lsm_scheme, LSM_SCHEME_LIST, lsm_scheme_name, lsm_scheme_from_name)
  *
@@ -27,6 +28,11 @@ static inline int lsm_name_index(const char *const *names, int count, const char
     if (strcmp(name, names[k]) == 0) return k;
   return -1;
 }
+
+#define LSM_ENUM(type, PREFIX, LIST, to_name, from_name)                      \
+  typedef enum type { PREFIX##_UNKNOWN = -1, LIST(LSM_ENUM_ITEM) PREFIX##_COUNT } type; \
+  const char *to_name(type value);                                                \
+  type from_name(const char *name)
 
 #define LSM_NAME_FUNCTIONS(type, LIST, to_name, from_name)                        \
   static const char *const to_name##_table_[] = {LIST(LSM_ENUM_TEXT)};            \

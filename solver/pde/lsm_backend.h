@@ -32,14 +32,9 @@
   X(LSM_BACKEND_C, "c")           /* scalar C path, OpenMP threads */           \
   X(LSM_BACKEND_OPENCL, "opencl") /* OpenCL device (PoCL on CPUs, GPUs) */      \
   X(LSM_BACKEND_AUTO, "auto")     /* OpenCL when a device is present, else C */
-typedef enum lsm_backend_kind {
-  LSM_BACKEND_UNKNOWN = -1,
-  LSM_BACKEND_LIST(LSM_ENUM_ITEM)
-  LSM_BACKEND_COUNT
-} lsm_backend_kind;
+LSM_ENUM(lsm_backend_kind, LSM_BACKEND, LSM_BACKEND_LIST, lsm_backend_kind_name,
+         lsm_backend_kind_from_name);
 
-const char *lsm_backend_kind_name(lsm_backend_kind kind);
-lsm_backend_kind lsm_backend_kind_from_name(const char *name);
 
 /* What one particle correction on a backend did (lsm_backend_ops.pls_correct);
  * the driver adds these to its lsm_pls_stats as lsm_pls_correct would. */

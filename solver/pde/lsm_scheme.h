@@ -19,26 +19,16 @@
   X(LSM_SCHEME_UPWIND, "upwind")  /* first-order Godunov upwind */              \
   X(LSM_SCHEME_ROEFIX, "roe-fix") /* Roe-Fix, Algorithm 3.1 of the design document */ \
   X(LSM_SCHEME_WENO5, "weno5")    /* fifth-order HJ-WENO derivatives, Godunov Hamiltonian */
-typedef enum lsm_scheme {
-  LSM_SCHEME_UNKNOWN = -1,
-  LSM_SCHEME_LIST(LSM_ENUM_ITEM)
-  LSM_SCHEME_COUNT
-} lsm_scheme;
+LSM_ENUM(lsm_scheme, LSM_SCHEME, LSM_SCHEME_LIST, lsm_scheme_name,
+         lsm_scheme_from_name);
 
 #define LSM_TIME_LIST(X)                                                        \
   X(LSM_TIME_EULER, "euler") /* forward Euler */                                \
   X(LSM_TIME_RK2, "rk2")     /* TVD Runge–Kutta 2 (Heun) */                     \
   X(LSM_TIME_RK3, "rk3")     /* TVD Runge–Kutta 3 (Shu–Osher) */
-typedef enum lsm_time {
-  LSM_TIME_UNKNOWN = -1,
-  LSM_TIME_LIST(LSM_ENUM_ITEM)
-  LSM_TIME_COUNT
-} lsm_time;
+LSM_ENUM(lsm_time, LSM_TIME, LSM_TIME_LIST, lsm_time_name,
+         lsm_time_from_name);
 
-const char *lsm_scheme_name(lsm_scheme scheme);
-lsm_scheme lsm_scheme_from_name(const char *name);
-const char *lsm_time_name(lsm_time time);
-lsm_time lsm_time_from_name(const char *name);
 /* Number of Hamiltonian evaluations per cell and step (1, 2, 3). */
 int lsm_time_stages(lsm_time time);
 

@@ -81,53 +81,30 @@ static inline int lsm_output_step_resolved(double step, double z_mag) {
   X(LSM_METHOD_LS, "ls")       /* level-set morph */                            \
   X(LSM_METHOD_BLEND, "blend") /* linear interpolation of the two signed distances */ \
   X(LSM_METHOD_PLS, "pls")     /* level-set morph with the particle level set correction */
-typedef enum lsm_method {
-  LSM_METHOD_UNKNOWN = -1,
-  LSM_METHOD_LIST(LSM_ENUM_ITEM)
-  LSM_METHOD_COUNT
-} lsm_method;
+LSM_ENUM(lsm_method, LSM_METHOD, LSM_METHOD_LIST, lsm_method_name,
+         lsm_method_from_name);
 
 #define LSM_INPUT_LIST(X)                                                       \
   X(LSM_INPUT_MASK, "mask")       /* filled regions */                          \
   X(LSM_INPUT_OUTLINE, "outline") /* thin closed contours, inside by parity */
-typedef enum lsm_input_kind {
-  LSM_INPUT_UNKNOWN = -1,
-  LSM_INPUT_LIST(LSM_ENUM_ITEM)
-  LSM_INPUT_COUNT
-} lsm_input_kind;
+LSM_ENUM(lsm_input_kind, LSM_INPUT, LSM_INPUT_LIST, lsm_input_name,
+         lsm_input_from_name);
 
 #define LSM_ALIGN_LIST(X)                                                       \
   X(LSM_ALIGN_HULL, "hull") /* convex-hull centroid to the image centre */      \
   X(LSM_ALIGN_NONE, "none")                                                     \
   X(LSM_ALIGN_AUTO, "auto") /* hull for a pair only when its shape moved (see above) */
-typedef enum lsm_align {
-  LSM_ALIGN_UNKNOWN = -1,
-  LSM_ALIGN_LIST(LSM_ENUM_ITEM)
-  LSM_ALIGN_COUNT
-} lsm_align;
-
-const char *lsm_method_name(lsm_method m);
-lsm_method lsm_method_from_name(const char *name);
-const char *lsm_input_name(lsm_input_kind k);
-lsm_input_kind lsm_input_from_name(const char *name);
-const char *lsm_align_name(lsm_align a);
-lsm_align lsm_align_from_name(const char *name);
+LSM_ENUM(lsm_align, LSM_ALIGN, LSM_ALIGN_LIST, lsm_align_name,
+         lsm_align_from_name);
 
 #define LSM_INTERP_LIST(X)                                                      \
   X(LSM_INTERP_LINEAR, "linear") /* each gap from its two slices only */        \
   X(LSM_INTERP_CUBIC, "cubic")   /* monotone cubic (PCHIP) through the four nearest slices */
-typedef enum lsm_interp {
-  LSM_INTERP_UNKNOWN = -1,
-  LSM_INTERP_LIST(LSM_ENUM_ITEM)
-  LSM_INTERP_COUNT
-} lsm_interp;
-
-const char *lsm_interp_name(lsm_interp i);
-lsm_interp lsm_interp_from_name(const char *name);
+LSM_ENUM(lsm_interp, LSM_INTERP, LSM_INTERP_LIST, lsm_interp_name,
+         lsm_interp_from_name);
 
 /* How the cubic profile ends an object at an empty slice (README, method
- * item 7); the linear profile always ends it at mid-gap. */
-/* tip: whole or narrowing up to mid-gap, then a tip closing at the empty slice;
+ * item 7); the linear profile always ends it at mid-gap.  tip: whole or narrowing up to mid-gap, then a tip closing at the empty slice;
  * halfway: the same up to mid-gap, nothing past it; auto: tip where the empty
  * slice is the first or last input slice (a stack cut one slice beyond the
  * object), halfway where more slices lie beyond it (a scan that covers more
@@ -136,14 +113,8 @@ lsm_interp lsm_interp_from_name(const char *name);
   X(LSM_ENDS_TIP, "tip")                                                        \
   X(LSM_ENDS_HALFWAY, "halfway")                                                \
   X(LSM_ENDS_AUTO, "auto")
-typedef enum lsm_end_rule {
-  LSM_ENDS_UNKNOWN = -1,
-  LSM_ENDS_LIST(LSM_ENUM_ITEM)
-  LSM_ENDS_COUNT
-} lsm_end_rule;
-
-const char *lsm_end_rule_name(lsm_end_rule e);
-lsm_end_rule lsm_end_rule_from_name(const char *name);
+LSM_ENUM(lsm_end_rule, LSM_ENDS, LSM_ENDS_LIST, lsm_end_rule_name,
+         lsm_end_rule_from_name);
 
 typedef struct lsm_stack_opts {
   lsm_method method;
