@@ -46,16 +46,51 @@ static int datatype_of(lsm_voxel_type type) {
                                                                            : DT_UNKNOWN;
 }
 
-/* 2 for a NIfTI-2 header (sizeof_hdr 540 in either byte order), else 1. */
-static int nifti_version(const char *path) {
-  gzFile gz = gzopen(path, "rb"); /* reads plain files too */
-  unsigned char b[4] = {0};
-  const int got = gz ? gzread(gz, b, 4) : 0;
+/* An integer of `bytes` bytes at p, little endian or not. */
+static int64_t int_at(const unsigned char *p, int bytes, int little) {
+  uint64_t u = 0;
+  for (int k = 0; k < bytes; ++k) u |= (uint64_t)p[little ? k : bytes - 1 - k] << (8 * k);
+  if (bytes < 8 && (u >> (8 * bytes - 1))) u |= ~(uint64_t)0 << (8 * bytes); /* sign */
+  return (int64_t)u;
+}
+
+/* Reads the first bytes of the header (through zlib: plain or gzip) and
+ * checks what nifticlib 3.0.1 trusts: the header size says NIfTI-1 (348) or
+ * NIfTI-2 (540) in either byte order, and dim[0], the dimension count that it
+ * loops over its fixed arrays with, lies in 1 .. 7 (a larger one overran its
+ * stack).  *version: 1 or 2. */
+static lsm_status nifti_precheck(const char *path, int *version, lsm_err *err) {
+  gzFile gz = gzopen(path, "rb");
+  unsigned char h[540];
+  const int got = gz ? gzread(gz, h, sizeof h) : -1;
   if (gz) gzclose(gz);
-  if (got != 4) return 1;
-  const unsigned le = b[0] | b[1] << 8 | (unsigned)b[2] << 16 | (unsigned)b[3] << 24;
-  const unsigned be = b[3] | b[2] << 8 | (unsigned)b[1] << 16 | (unsigned)b[0] << 24;
-  return le == 540 || be == 540 ? 2 : 1;
+  if (got < 348) return lsm_fail(err, LSM_ERR_INPUT, path, "cannot read: too short for a NIfTI header");
+  const int64_t le = int_at(h, 4, 1), be = int_at(h, 4, 0);
+  *version = le == 540 || be == 540 ? 2 : 1;
+  const int little = *version == 2 ? le == 540 : le == 348;
+  if (!(le == 348 || be == 348 || le == 540 || be == 540))
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "cannot read: not a NIfTI-1 or NIfTI-2 file (its header size is %lld)",
+                    (long long)le);
+  if (*version == 2 && got < 540)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "cannot read: too short for a NIfTI-2 header");
+  const int64_t dims = *version == 2 ? int_at(h + 16, 8, little) : int_at(h + 40, 2, little);
+  if (dims < 1 || dims > 7)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "damaged header: %lld dimensions (dim[0])",
+                    (long long)dims);
+  for (int64_t d = 1; d <= dims; ++d) { /* (nifticlib prints its own message for these) */
+    const int64_t n = *version == 2 ? int_at(h + 16 + 8 * d, 8, little) : int_at(h + 40 + 2 * d, 2, little);
+    if (n < 1)
+      return lsm_fail(err, LSM_ERR_INPUT, path, "damaged header: dimension %lld has size %lld",
+                      (long long)d, (long long)n);
+  }
+  const int datatype = (int)int_at(h + (*version == 2 ? 12 : 70), 2, little);
+  if (voxel_type_of(datatype) == LSM_VOXEL_UNKNOWN)
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "not a label map: its samples are %s (labels are integers, or floats "
+                    "holding whole numbers)",
+                    nifti_datatype_string(datatype));
+  return LSM_OK;
 }
 
 /* Index to RAS world as the header says it (see the file comment). */
@@ -76,6 +111,8 @@ static void ras_affine(const nifti_image *nim, double m[3][4]) {
 
 lsm_status lsm_nifti_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err *err) {
   nifti_set_debug_level(0);
+  int version = 1;
+  LSM_TRY(nifti_precheck(f->path, &version, err));
   nifti_image *nim = nifti_image_read(f->path, 0);
   if (!nim)
     return lsm_fail(err, LSM_ERR_INPUT, f->path,
@@ -130,7 +167,7 @@ lsm_status lsm_nifti_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err
                     "damaged");
   f->vox.data = nim->data;
   f->compressed = nifti_is_gzfile(f->path);
-  f->nifti2 = nifti_version(f->path) == 2;
+  f->nifti2 = version == 2;
   /* lsmorph's own notes ("lsmorph...: text") travel to an output of the other format too */
   lsm_status st = LSM_OK;
   for (int k = 0; st == LSM_OK && k < nim->num_ext; ++k) {
