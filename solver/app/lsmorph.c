@@ -24,6 +24,7 @@
 #include "io/lsm_io.h"
 #include "solver/pde/lsm_backend.h"
 #include "solver/app/lsm_cli.h"
+#include "solver/app/lsm_fill_cmd.h"
 #include "io/lsm_mesh.h"
 #include "solver/app/lsm_metrics.h"
 #include "solver/app/lsm_mpi.h"
@@ -1610,7 +1611,27 @@ static int hold_standard_fds(void) {
   return 0;
 }
 
+/* `lsmorph fill` (and 3D Slicer's call of it): label volumes in and out. */
+static int run_fill(int argc, char **argv) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  install_stop_handlers(1);
+  const lsm_status st = lsm_fill_main(argc, argv, &stop_signal, &err);
+  const int sig = stop_signal;
+  if (st != LSM_OK && sig) {
+    fprintf(stderr, "lsmorph: error: interrupted by %s; no result was written\n",
+            stop_signal_name(sig));
+    signal(sig, SIG_DFL);
+    raise(sig);
+    return 128 + sig;
+  }
+  if (st == LSM_OK) return check_stdout(&err) == LSM_OK ? 0 : 1;
+  fprintf(stderr, "lsmorph: error: %s\n", err.msg[0] ? err.msg : lsm_status_name(st));
+  return st == LSM_ERR_USAGE ? 2 : 1;
+}
+
 static int run(int argc, char **argv, const lsm_mpi *mpi) {
+  if (lsm_fill_wanted(argc, argv)) return lsm_mpi_rank(mpi) == 0 ? run_fill(argc, argv) : 0;
   lsm_cli cli;
   lsm_err err;
   lsm_err_clear(&err);
