@@ -25,6 +25,7 @@
 #include "solver/pde/lsm_backend.h"
 #include "solver/app/lsm_cli.h"
 #include "solver/app/lsm_fill_cmd.h"
+#include "solver/app/lsm_label_score.h"
 #include "io/lsm_mesh.h"
 #include "solver/app/lsm_metrics.h"
 #include "solver/app/lsm_mpi.h"
@@ -1630,8 +1631,20 @@ static int run_fill(int argc, char **argv) {
   return st == LSM_ERR_USAGE ? 2 : 1;
 }
 
+/* `lsmorph score` of two label volumes. */
+static int run_label_score(int argc, char **argv) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_status st = lsm_label_score_main(argc, argv, &err);
+  if (st == LSM_OK) st = check_stdout(&err);
+  if (st == LSM_OK) return 0;
+  fprintf(stderr, "lsmorph: error: %s\n", err.msg[0] ? err.msg : lsm_status_name(st));
+  return st == LSM_ERR_USAGE ? 2 : 1;
+}
+
 static int run(int argc, char **argv, const lsm_mpi *mpi) {
   if (lsm_fill_wanted(argc, argv)) return lsm_mpi_rank(mpi) == 0 ? run_fill(argc, argv) : 0;
+  if (lsm_label_score_wanted(argc, argv)) return lsm_mpi_rank(mpi) == 0 ? run_label_score(argc, argv) : 0;
   lsm_cli cli;
   lsm_err err;
   lsm_err_clear(&err);
