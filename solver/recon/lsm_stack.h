@@ -40,6 +40,7 @@
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_names.h"
 #include "solver/pde/lsm_morph.h"
+#include "solver/recon/lsm_rules.h"
 #include "solver/base/lsm_status.h"
 
 /* The lengths a run accepts (pixel size, dz, the height between two input
@@ -117,6 +118,7 @@ typedef struct lsm_stack_opts {
   int max_iter;        /* most solver steps per pair (default 100000) */
   lsm_morph_opts morph;
   const struct lsm_gap_transport *transport; /* NULL: one process (see below) */
+  lsm_rules rules;     /* the reconstruction rules switched on, and their constants */
 } lsm_stack_opts;
 
 void lsm_stack_opts_default(lsm_stack_opts *opts);
