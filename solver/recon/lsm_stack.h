@@ -91,12 +91,13 @@ LSM_ENUM(lsm_align, LSM_ALIGN, LSM_ALIGN_LIST, lsm_align_name,
 LSM_ENUM(lsm_interp, LSM_INTERP, LSM_INTERP_LIST, lsm_interp_name,
          lsm_interp_from_name);
 
-/* How the cubic profile ends an object at an empty slice (README, method
- * item 7); the linear profile always ends it at mid-gap.  tip: whole or narrowing up to mid-gap, then a tip closing at the empty slice;
- * halfway: the same up to mid-gap, nothing past it; auto: tip where the empty
- * slice is the first or last input slice (a stack cut one slice beyond the
- * object), halfway where more slices lie beyond it (a scan that covers more
- * than the object). */
+/* How the cubic profile ends an object at an empty slice (lsm_ends.h;
+ * solver/README.md, section 8); the linear profile always ends it at mid-gap.
+ * tip: whole or narrowing up to mid-gap, then a tip closing at the empty
+ * slice; halfway: the same up to mid-gap, nothing past it; auto: tip where
+ * the empty slice is the first or last input slice (a stack cut one slice
+ * beyond the object), halfway where more slices lie beyond it (a scan that
+ * covers more than the object). */
 #define LSM_ENDS_LIST(X)                                                        \
   X(LSM_ENDS_TIP, "tip")                                                        \
   X(LSM_ENDS_HALFWAY, "halfway")                                                \
