@@ -1,13 +1,13 @@
 """The two end rules side by side: an object ending next to an empty slice
 against the same object ending beside something that goes on.
 
-lsmorph ends a part of the object in two ways (README, method item 7):
+lsmorph ends a part of the object in two ways (solver/README.md §8):
   - alone: the whole section meets an empty slice, and the end rule of
     solver/recon/lsm_ends.c runs (the trend of the slices before, area caps, a
     section whole at mid-gap closing in a tip at the empty slice);
   - beside: the slice on the other side still holds something else, far away,
     and the part has no counterpart there; the halfway rule for components
-    (cap_unmatched in solver/recon/lsm_stack.c) closes it by mid-gap, a paraboloid
+    (lsm_cap_unmatched in solver/recon/lsm_unmatched.c) closes it by mid-gap, a paraboloid
     cap, inside the ordinary morph and cubic.
 This script puts each analytic solid of end_offsets.py on a wider canvas,
 once alone and once with a bar in every slice, 90 px to its right (farther

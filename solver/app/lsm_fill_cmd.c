@@ -21,7 +21,7 @@
 static const char *const shared_valued[] = {
     "--method", "--interp", "--ends", "--align", "--scheme", "--time", "--cfl",
     "--reinit-every", "--reinit-iters", "--max-iter", "--particles-per-cell", "--pls-reseed",
-    "--seed", "--backend", "--device", "--max-voxels", NULL};
+    "--seed", "--backend", "--device", "--max-voxels", "--rules-off", NULL};
 static const char *const shared_flags[] = {"--pls-radius-adjust", "-q", "--quiet", NULL};
 /* fill's own options with a value */
 static const char *const own_valued[] = {"-o", "--output", "--axis", "--slices", "--labels",

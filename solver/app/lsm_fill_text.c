@@ -42,7 +42,7 @@ static const char fill_help[] =
     "Method (as for 'lsmorph help reconstruct'):\n"
     "  --method ls|pls|blend, --interp cubic|linear, --align auto|hull|none,\n"
     "  --scheme, --time, --cfl, --reinit-every, --reinit-iters, --max-iter,\n"
-    "  --particles-per-cell, --pls-reseed, --pls-radius-adjust, --seed\n"
+    "  --particles-per-cell, --pls-reseed, --pls-radius-adjust, --seed, --rules-off\n"
     "  --ends halfway|tip|auto  default halfway: the drawn slices were placed without\n"
     "                         regard to where each structure ends, so an end may lie\n"
     "                         anywhere in its gap, and mid-gap is the median\n"
