@@ -16,7 +16,7 @@ static const char general_help[] =
     "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
     "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
     "  lsmorph devices\n"
-    "  lsmorph --help [COMMAND] | --version | help reconstruct|score|devices\n"
+    "  lsmorph --help [COMMAND] | --version | help reconstruct|score|devices|rules\n"
     "\n"
     "Commands:\n"
     "  reconstruct   read PNG or TIFF slices, morph between consecutive slices, write a volume\n"
@@ -158,6 +158,7 @@ static const char reconstruct_help_method[] =
     "                         more once shifted, the shift of largest overlap nearer the\n"
     "                         centroid shift than none, and the two alike at that shift\n"
     "                         (solver/README.md, section 9); none: no alignment\n"
+    "  --rules-off NAME,...   switch rules off, for experiments ('lsmorph help rules')\n"
     "\n";
 
 static const char reconstruct_help_running[] =
@@ -293,6 +294,8 @@ void lsm_cli_help(FILE *f, const char *topic) {
     fputs(score_help, f);
   else if (topic && strcmp(topic, "devices") == 0)
     fputs(devices_help, f);
+  else if (topic && strcmp(topic, "rules") == 0)
+    lsm_rules_print(f);
   else
     fputs(general_help, f);
 }
@@ -580,6 +583,9 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       NEEDS_VALUE();
       if ((so->align = lsm_align_from_name(v)) == LSM_ALIGN_UNKNOWN)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--align: '%s' is not one of auto, hull, none", v);
+    } else if (IS("--rules-off")) {
+      NEEDS_VALUE();
+      LSM_TRY(lsm_rules_switch_off(&so->rules, v, err));
     } else if (IS("--threads")) {
       NEEDS_VALUE();
       LSM_TRY(parse_int(name, v, 1, 4096, &n, err));
@@ -673,10 +679,11 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
     cli->command = LSM_CMD_HELP;
     cli->help_topic = argc > 2 ? argv[2] : NULL;
     if (cli->help_topic && strcmp(cli->help_topic, "reconstruct") != 0 &&
-        strcmp(cli->help_topic, "score") != 0 && strcmp(cli->help_topic, "devices") != 0)
+        strcmp(cli->help_topic, "score") != 0 && strcmp(cli->help_topic, "devices") != 0 &&
+        strcmp(cli->help_topic, "rules") != 0)
       return lsm_fail(err, LSM_ERR_USAGE, NULL,
-                      "%s: no command '%s' (help reconstruct, help score, help devices)", cmd,
-                      cli->help_topic);
+                      "%s: no command '%s' (help reconstruct, help score, help devices, help rules)",
+                      cmd, cli->help_topic);
     if (argc > 3)
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes one command at most, not '%s'", cmd,
                       argv[3]);
@@ -706,4 +713,37 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
     return parse_score(&c, cli, err);
   }
   return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown command '%s' (see 'lsmorph --help')", cmd);
+}
+
+void lsm_cli_note_unused(const lsm_cli *cli, FILE *f) {
+  if (cli->stack.per_iteration && cli->stack.dz > 0)
+    fprintf(f, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
+               "iteration is a slice)\n");
+  if (cli->stack.per_iteration &&
+      ((cli->interp_given && cli->stack.interp != LSM_INTERP_LINEAR) ||
+       (cli->ends_given && cli->stack.ends != LSM_ENDS_HALFWAY)))
+    fprintf(f, "lsmorph: note: --per-iteration takes the linear profile and ends an "
+               "object at mid-gap: --interp cubic and --ends tip|auto have no effect\n");
+  else if (cli->stack.interp == LSM_INTERP_LINEAR && cli->ends_given &&
+           cli->stack.ends != LSM_ENDS_HALFWAY)
+    fprintf(f, "lsmorph: note: --interp linear ends an object at mid-gap: --ends "
+               "tip|auto have no effect (they shape the cubic profile's ends)\n");
+  if (cli->stack.method == LSM_METHOD_BLEND && cli->solver_option)
+    fprintf(f, "lsmorph: note: %s has no effect with --method blend, which solves no "
+               "PDE (no solver option does: --scheme, --time, --cfl, --max-iter, "
+               "--reinit-every, --reinit-iters)\n", cli->solver_option);
+  if (cli->stack.method != LSM_METHOD_PLS && cli->pls_option)
+    fprintf(f, "lsmorph: note: %s has no effect without --method pls (it sets up the "
+               "particles)\n", cli->pls_option);
+  if (!cli->stack.per_iteration && cli->tol_given)
+    fprintf(f, "lsmorph: note: --tol has no effect without --per-iteration (it stops "
+               "each pair of that mode)\n");
+  if (cli->backend == LSM_BACKEND_C && cli->device_given)
+    fprintf(f, "lsmorph: note: --device has no effect with --backend c\n");
+  if (cli->nrrd_encoding_given && !(cli->formats & LSM_FORMAT_NRRD))
+    fprintf(f, "lsmorph: note: --nrrd-encoding has no effect without nrrd in --format\n");
+  if (cli->stack.method != LSM_METHOD_BLEND && cli->stack.morph.cfl > 1.0)
+    fprintf(f, "lsmorph: note: --cfl %g is above 1, where the schemes are no longer "
+               "monotone: thin parts may oscillate or blow up (a blow-up stops the run "
+               "with an error)\n", cli->stack.morph.cfl);
 }
