@@ -245,6 +245,53 @@ def verify(d, src, out):
                "%s: vtkNrrdReader: spacing %s and origin %s, the input's" % (out, np.round(sp, 4).tolist(), np.round(org, 3).tolist()))
 
 
+def surface(v, label):
+    """The voxels of label with a 6-neighbour outside it, or on the volume's border."""
+    m = v == label
+    inner = m.copy()
+    for a in range(3):
+        for shift in (1, -1):
+            inner &= np.roll(m, shift, a)
+        sl = [slice(None)] * 3
+        sl[a] = 0
+        inner[tuple(sl)] = False
+        sl[a] = -1
+        inner[tuple(sl)] = False
+    return m & ~inner
+
+
+def score(d, truth, out, report_json):
+    """lsmorph score's Dice and distances against numpy's: Dice pooled over the slices not
+    drawn, the 3D distances between the labels' surfaces (brute force)."""
+    import json
+    t, _, _, _ = read(os.path.join(d, truth))
+    b, _, note, _ = read(os.path.join(d, out))
+    res = json.load(open(os.path.join(d, report_json)))
+    axis, drawn = parse_note(note)
+    held = [k for k in range(drawn[0] + 1, drawn[-1]) if k not in drawn]
+    report(res["held_out"] == len(held) and res["axis"] == "ijk"[axis],
+           "score: axis %s, %d slices scored" % (res["axis"], res["held_out"]))
+    sel = [slice(None)] * 3
+    sel[axis] = held
+    for entry in res["labels"]:
+        v = entry["label"]
+        x, y = t[tuple(sel)] == v, b[tuple(sel)] == v
+        dice = 2 * (x & y).sum() / max(1, x.sum() + y.sum())
+        st, sr = surface(t, v), surface(b, v)
+        pt, pr = np.argwhere(st) * SPACING, np.argwhere(sr) * SPACING
+        on_t = np.isin(np.argwhere(st)[:, axis], held)
+        on_r = np.isin(np.argwhere(sr)[:, axis], held)
+        def nearest(p, q):
+            return np.array([np.sqrt(((q - r) ** 2).sum(1)).min() for r in p]) if len(p) else np.zeros(0)
+        dist = np.sort(np.concatenate([nearest(pt[on_t], pr), nearest(pr[on_r], pt)]))
+        hd = dist[int(np.ceil(0.95 * len(dist))) - 1] if len(dist) else None
+        good = abs(entry["dice"] - dice) < 1e-9 and (hd is None or
+               (abs(entry["hd95"] - hd) < 1e-6 and abs(entry["mean_surface"] - dist.mean()) < 1e-6))
+        report(good, "score: label %d: Dice %.4f (numpy %.4f), HD95 %s, mean %s mm (numpy %s, %s)"
+               % (v, entry["dice"], dice, entry["hd95"], entry["mean_surface"], hd,
+                  None if hd is None else dist.mean()))
+
+
 def same(d, names):
     first = read(os.path.join(d, names[0]))[0]
     for n in names[1:]:
@@ -266,4 +313,4 @@ def labels(d, drawn, some, every, chosen):
 if __name__ == "__main__":
     cmd, args = sys.argv[1], sys.argv[2:]
     {"make": lambda: make(*args), "verify": lambda: verify(*args), "same": lambda: same(args[0], args[1:]),
-     "labels": lambda: labels(*args)}[cmd]()
+     "labels": lambda: labels(*args), "score": lambda: score(*args)}[cmd]()

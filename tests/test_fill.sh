@@ -60,6 +60,21 @@ run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" verify "$TMP" drawn-i.nii.gz o
 fill drawn.nii.gz blend.nii.gz --method blend --interp linear --max_iter 500 -q
 check "-q: nothing on stderr" [ ! -s "$TMP/e" ]
 
+# score of two label volumes: the slices from the record in OUT's header, against numpy
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/out-drawn.nii.gz" >"$TMP/score.json" 2>"$TMP/e"
+rc=$?
+check "score: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" score "$TMP" truth.nii.gz out-drawn.nii.gz score.json
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/truth.nii.gz" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "score without a record: exit 2 (got $rc)" [ $rc -eq 2 ]
+check "score without a record: asks for --slices" grep -q "give --slices LIST and --axis" "$TMP/e"
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/truth.nii.gz" --slices 0:40:4 --axis k >"$TMP/o" 2>"$TMP/e"
+check "score of the truth against itself: Dice 1" grep -q '"mean": {"dice": 1,' "$TMP/o"
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/out-i.nii.gz" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "score of volumes of other sizes: exit 1 (got $rc)" [ $rc -eq 1 ]
+
 # ---- errors: exit 1 (2 for usage), a message, no output, before any work -------------------
 expect() { # expect RC PHRASE ARGS...
   want=$1 phrase=$2
