@@ -66,7 +66,7 @@ static lsm_status counted_send(void *ctx, size_t gap, const lsm_gap_result *resu
  * gap, which rank 0 waits for: rank 0 then reports it and ends the run. */
 static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *transport,
                                      lsm_err *err) {
-  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
+  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}, NULL};
   double *z = NULL;
   lsm_pair_stats *stats = NULL;
   lsm_backend *backend = NULL;
@@ -112,6 +112,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   lsm_backend_close(&backend);
   free(stats);
   free(z);
+  free(src.blank);
   lsm_path_list_free(src.paths, src.count);
   return st;
 }
@@ -203,7 +204,7 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   if (lsm_mpi_rank(mpi) != 0) return reconstruct_worker(cli, lsm_mpi_transport(mpi), err);
   cli->stack.transport = lsm_mpi_transport(mpi);
   const double t_start = lsm_wall_seconds();
-  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
+  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}, NULL};
   double *z = NULL;
   int width = 0, height = 0;
   lsm_pair_stats *stats = NULL;
@@ -213,6 +214,7 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   lsm_out_dir out_dir;
   memset(&out_dir, 0, sizeof out_dir);
   lsm_status st = read_inputs(cli, &src, &z, &width, &height, err);
+  if (st == LSM_OK && !cli->quiet) src.blank = calloc(src.count, 1); /* for a note; optional */
   lsm_stack_opts_resolve(&cli->stack); /* run.json records what the run uses */
   const int threads = setup_run(cli);
   if (st == LSM_OK) st = open_backend(cli, threads, &backend, err);
@@ -256,12 +258,14 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   }
   if (st == LSM_OK) st = lsm_signals_check(err); /* a signal now still means no result */
   if (st == LSM_OK) st = lsm_out_dir_publish(&out_dir, err);
+  if (st == LSM_OK && !cli->quiet) lsm_inputs_note_blank(&src, cli->slice_dir);
   if (st == LSM_OK && !cli->quiet) report_result(cli, &src, z, &out, stats, t_start);
   lsm_outputs_free(&out); /* before a failed run's folder is removed */
   if (st != LSM_OK) lsm_out_dir_discard(&out_dir, err);
   lsm_backend_close(&backend);
   free(stats);
   free(z);
+  free(src.blank);
   lsm_path_list_free(src.paths, src.count);
   return st;
 }
