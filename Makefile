@@ -93,7 +93,12 @@ $(DEPS_STAMP):
 	@sh tests/install-deps.sh $(DEBIAN_PACKAGES)
 	@mkdir -p $(BUILD) && touch $@
 
-$(BUILD)/obj/%.o: %.c | $(DEPS_STAMP)
+# Objects are rebuilt when the compiler or its flags change (-fPIC came in with
+# liblsmorph.so): a stamp holds them and is rewritten only when they differ.
+FLAGS_STAMP := $(BUILD)/.cflags
+$(shell mkdir -p $(BUILD) && echo '$(CC) $(CFLAGS)' | cmp -s - $(FLAGS_STAMP) || \
+  echo '$(CC) $(CFLAGS)' > $(FLAGS_STAMP))
+$(BUILD)/obj/%.o: %.c $(FLAGS_STAMP) | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) -c $< -o $@
 
