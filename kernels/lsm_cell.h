@@ -306,6 +306,10 @@ LSM_FN float lsm_godunov_grad(float s, float dxm, float dxp, float dym, float dy
   return LSM_SQRT(gx + gy);
 }
 
+/* The pseudo-time step: dtau = h / 2, h = min(dx, dy). */
+LSM_FN float lsm_reinit_h(float dx, float dy) { return dx < dy ? dx : dy; }
+LSM_FN float lsm_reinit_dtau(float h) { return 0.5f * h; }
+
 /* One explicit pseudo-time step of size dtau for a cell.
  *   phi, phi0           the cell's current and initial values
  *   l0, r0, d0, u0      phi0 at the 4 neighbours (x-1, x+1, y-1, y+1)

@@ -19,7 +19,7 @@ static void test_reconstruct_defaults(void **state) {
   assert_int_equal(parse(&cli, &err, 5, argv), LSM_OK);
   assert_int_equal(cli.command, LSM_CMD_RECONSTRUCT);
   assert_int_equal(cli.device, -1);
-  assert_int_equal(cli.backend, LSM_BACKEND_C);
+  assert_string_equal(cli.backend, "c");
   assert_true(cli.spacing == 1.0);
   assert_int_equal(cli.threads, 0);
   assert_true(cli.max_pixels == (uint64_t)1 << 28);

@@ -418,6 +418,7 @@ static void cli_defaults(lsm_cli *cli) {
   cli->values = LSM_VALUES_SDF;
   cli->mesh = 0;
   cli->preview = 1;
+  cli->backend = "c";
   cli->device = -1; /* the first GPU, else the first device */
   lsm_stack_opts_default(&cli->stack);
 }
@@ -563,8 +564,12 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       so->morph.pls.seed = (uint64_t)seed;
     } else if (IS("--backend")) {
       NEEDS_VALUE();
-      if ((cli->backend = lsm_backend_kind_from_name(v)) == LSM_BACKEND_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--backend: '%s' is not one of c, opencl, auto", v);
+      if (!lsm_backend_find(v) && strcmp(v, "auto") != 0) {
+        char names[128];
+        lsm_backend_names(names, sizeof names);
+        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--backend: '%s' is not one of %s", v, names);
+      }
+      cli->backend = v;
     } else if (IS("--device")) {
       NEEDS_VALUE();
       LSM_TRY(parse_int(name, v, 0, 1000, &n, err));
@@ -738,7 +743,7 @@ void lsm_cli_note_unused(const lsm_cli *cli, FILE *f) {
   if (!cli->stack.per_iteration && cli->tol_given)
     fprintf(f, "lsmorph: note: --tol has no effect without --per-iteration (it stops "
                "each pair of that mode)\n");
-  if (cli->backend == LSM_BACKEND_C && cli->device_given)
+  if (strcmp(cli->backend, "c") == 0 && cli->device_given)
     fprintf(f, "lsmorph: note: --device has no effect with --backend c\n");
   if (cli->nrrd_encoding_given && !(cli->formats & LSM_FORMAT_NRRD))
     fprintf(f, "lsmorph: note: --nrrd-encoding has no effect without nrrd in --format\n");
