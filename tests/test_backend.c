@@ -3,6 +3,7 @@
  * run.json prints, and the driver's tableaux, reinitialisation loop and CFL step against the C
  * reference's own sweeps called by hand (bit for bit).  OpenCL against C: test_opencl.c. */
 #include "tests/lsm_test.h"
+#include "tests/lsm_test_pair.h"
 
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_status.h"
@@ -10,29 +11,6 @@
 #include "solver/pde/lsm_fields.h"
 #include "solver/pde/lsm_reinit.h"
 #include "solver/pde/lsm_scheme.h"
-
-static lsm_grid *new_grid(int nx, int ny, float dx, float dy) {
-  lsm_grid *g = NULL;
-  lsm_err err;
-  lsm_err_clear(&err);
-  assert_int_equal(lsm_grid_create(nx, ny, dx, dy, &g, &err), LSM_OK);
-  return g;
-}
-
-/* A disc morphing into an offset, squashed disc (F changes sign). */
-static void fill_pair(lsm_grid *src, lsm_grid *dst) {
-  for (int j = 0; j < src->ny; ++j)
-    for (int i = 0; i < src->nx; ++i) {
-      const double x = (i + 0.5) * src->dx, y = (j + 0.5) * src->dy;
-      LSM_AT(src, i, j) = (float)(hypot(x - 0.42 * src->nx * src->dx, y - 0.5 * src->ny * src->dy) -
-                                  0.3 * src->ny * src->dy);
-      LSM_AT(dst, i, j) = (float)(hypot(x - 0.58 * src->nx * src->dx,
-                                        1.4 * (y - 0.55 * src->ny * src->dy)) -
-                                  0.26 * src->ny * src->dy);
-    }
-  lsm_grid_fill_ghosts(src);
-  lsm_grid_fill_ghosts(dst);
-}
 
 static void assert_same_interior(const lsm_grid *a, const lsm_grid *b) {
   for (int j = 0; j < a->ny; ++j)

@@ -20,17 +20,9 @@ static lsm_status cl_open(int device, int threads, void **ctx, lsm_err *err) {
   return lsm_cl_context_open(device, ctx, err);
 }
 
-/* The program is built at every open (no cache of our own: kernels/README.md). */
 static int cl_facts(const void *ctx, lsm_backend_fact *facts, int max) {
   const lsm_cl_ctx *c = ctx;
-  const lsm_backend_fact all[] = {
-      {"device", LSM_FACT_TEXT, c->name, 0.0, 0},
-      {"build_seconds", LSM_FACT_NUMBER, NULL, c->build_seconds, 0},
-      {"kernel_cache_hit", LSM_FACT_FLAG, NULL, 0.0, 0},
-  };
-  int n = 0;
-  for (; n < max && n < (int)(sizeof all / sizeof *all); ++n) facts[n] = all[n];
-  return n;
+  return lsm_backend_contract_facts(facts, max, c->name, c->build_seconds);
 }
 
 static void cl_destroy(void *state) {

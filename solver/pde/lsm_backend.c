@@ -85,6 +85,18 @@ int lsm_backend_facts(const lsm_backend *b, lsm_backend_fact *facts, int max) {
   return b->entry->ops->facts(b->ctx, facts, max);
 }
 
+int lsm_backend_contract_facts(lsm_backend_fact *facts, int max, const char *device,
+                               double build_seconds) {
+  const lsm_backend_fact contract[] = {
+      {"device", LSM_FACT_TEXT, device, 0.0, 0},
+      {"build_seconds", LSM_FACT_NUMBER, NULL, build_seconds, 0},
+      {"kernel_cache_hit", LSM_FACT_FLAG, NULL, 0.0, 0},
+  };
+  int n = 0;
+  for (; n < max && n < (int)(sizeof contract / sizeof *contract); ++n) facts[n] = contract[n];
+  return n;
+}
+
 const char *lsm_backend_device(const lsm_backend *b) {
   lsm_backend_fact facts[LSM_BACKEND_FACTS_MAX];
   const int n = lsm_backend_facts(b, facts, LSM_BACKEND_FACTS_MAX);

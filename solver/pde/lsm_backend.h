@@ -137,6 +137,12 @@ int lsm_backend_host_threads(const lsm_backend *backend);
 int lsm_backend_facts(const lsm_backend *backend, lsm_backend_fact *facts, int max);
 const char *lsm_backend_device(const lsm_backend *backend);
 
+/* For a backend's facts op: the run.json contract's three facts, device (text), build_seconds
+ * (the kernel program's build) and kernel_cache_hit (false: lsmorph keeps no kernel cache),
+ * into facts[0 .. max); returns how many. */
+int lsm_backend_contract_facts(lsm_backend_fact *facts, int max, const char *device,
+                               double build_seconds);
+
 /* Prints the devices of every backend that has them; LSM_ERR_UNSUPPORTED (with a message)
  * when none can list any. */
 lsm_status lsm_backend_list_devices(FILE *f, lsm_err *err);

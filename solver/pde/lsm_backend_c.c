@@ -29,17 +29,10 @@ static lsm_status c_open(int device, int threads, void **ctx, lsm_err *err) {
 
 static void c_close(void *ctx) { free(ctx); }
 
-/* Nothing is built and nothing cached: the contract's build facts are 0 and false. */
+/* Nothing is built: build_seconds 0. */
 static int c_facts(const void *ctx, lsm_backend_fact *facts, int max) {
   const c_ctx *c = ctx;
-  const lsm_backend_fact all[] = {
-      {"device", LSM_FACT_TEXT, c ? c->device : "C", 0.0, 0},
-      {"build_seconds", LSM_FACT_NUMBER, NULL, 0.0, 0},
-      {"kernel_cache_hit", LSM_FACT_FLAG, NULL, 0.0, 0},
-  };
-  int n = 0;
-  for (; n < max && n < (int)(sizeof all / sizeof *all); ++n) facts[n] = all[n];
-  return n;
+  return lsm_backend_contract_facts(facts, max, c ? c->device : "C", 0.0);
 }
 
 static void c_destroy(void *state) {

@@ -328,18 +328,9 @@ static lsm_status seed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
 void lsm_pls_destroy(lsm_particles **pp) {
   if (!pp || !*pp) return;
   lsm_particles *p = *pp;
-  free(p->x);
-  free(p->y);
-  free(p->x0);
-  free(p->y0);
-  free(p->radius);
-  free(p->sign);
-  free(p->state);
-  free(p->plus);
-  free(p->minus);
-  free(p->velocity);
-  free(p->mark);
-  free(p->escaped);
+  void *owned[] = {p->x,     p->y,     p->x0,       p->y0,   p->radius,  p->sign,
+                   p->state, p->plus,  p->minus,    p->velocity, p->mark, p->escaped};
+  for (size_t k = 0; k < sizeof owned / sizeof *owned; ++k) free(owned[k]);
   free(p);
   *pp = NULL;
 }
