@@ -93,8 +93,8 @@ void lsm_cl_grid_destroy(lsm_cl_grid *g) {
 }
 
 /* Work-group shapes.  Cell kernels: row segments of LX work-items, LX a power of two from 8
- * up to local_max, no wider than the row needs (taller groups run several times slower on
- * PoCL: its work-item loops vectorise along rows).  Reductions: whole groups across the width
+ * up to local_max, no wider than the row needs (PoCL's work-item loops vectorise along
+ * rows: taller groups are slower).  Reductions: whole groups across the width
  * (runs of red_run cells per work-item); down the height at most enough groups for ~1024
  * partial results (work-items then loop over rows). */
 static void shapes(lsm_cl_grid *g) {

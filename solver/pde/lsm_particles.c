@@ -59,8 +59,8 @@ static int pls_threads(const lsm_particles *p, size_t n) {
 
 /* ---- interpolation ---------------------------------------------------------------- */
 
-/* Forced inlining into the particle loops: about 20 % faster advection with
- * GCC 12 (the out-of-line versions were not inlined at -O3). */
+/* Forced inlining into the particle loops (GCC 12 left them out of line at
+ * -O3; validation/measurements/pde.md). */
 #if defined(__GNUC__)
 #define PCL_INLINE static inline __attribute__((always_inline))
 #else
@@ -413,11 +413,10 @@ void lsm_pls_begin_step(lsm_particles *p, int stages) {
  * compiler vectorises them (GCC function multi-versioning picks the AVX2 or
  * AVX-512 clone at load time, same arithmetic, no FMA contraction in C17).
  * The interpolations' loads stay scalar per lane, two neighbouring floats at
- * a time (load_pair): GCC's generic tuning emits no gather instructions, and
- * with them (-mtune=icelake-server) the bunny's pls run was 18 % slower on
- * this AMD EPYC.  F and the unit normal N at a particle come from the node
- * field v (three planes: F, gx, gy), bilinearly interpolated; the new
- * position is lsm_pcl_stage_coord, as on OpenCL. */
+ * a time (load_pair): gather instructions were slower.  F and the unit normal
+ * N at a particle come from the node field v (three planes: F, gx, gy),
+ * bilinearly interpolated; the new position is lsm_pcl_stage_coord, as on
+ * OpenCL. */
 PCL_INLINE float float_bits(uint32_t bits) {
   float f;
   memcpy(&f, &bits, sizeof f);
@@ -426,8 +425,7 @@ PCL_INLINE float float_bits(uint32_t bits) {
 
 /* The two floats at p and p + 1 in one 64-bit load: the vectorised loops load
  * each lane's neighbours element by element, and in pairs that is half the
- * loads (the bunny every 8th, pls, one thread: morph 0.335 -> 0.283 s with the
- * blocked detection below; same values). */
+ * loads. */
 PCL_INLINE void load_pair(const float *restrict p, float *first, float *second) {
   uint64_t bits;
   memcpy(&bits, p, sizeof bits);

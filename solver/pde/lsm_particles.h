@@ -1,5 +1,5 @@
 /* lsm_particles: the particle level set (PLS) correction of the morph
- * (METHOD.md §4; design document §3.3.13, Algorithms 3.2 and 3.3,
+ * (solver/README.md §11; the design document's Algorithms 3.2 and 3.3,
  * Eq. 3.15–3.26; Enright, Fedkiw, Ferziger & Mitchell 2002).
  *
  * Marker particles are seeded in a band around the zero level of phi_0,

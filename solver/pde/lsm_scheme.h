@@ -1,11 +1,12 @@
-/* lsm_scheme: one explicit step of the morph equation on a grid.
+/* lsm_scheme: the schemes and integrators by name, and the C reference's sweeps over host
+ * grids for the morph equation
  *
- *   phi_t + F |grad phi| = 0,   F = phi - phi_target         (METHOD.md §2)
+ *   phi_t + F |grad phi| = 0,   F = phi - phi_target         (solver/README.md §2, §4)
  *
- * Spatial schemes (numerical Hamiltonians, per cell in kernels/lsm_cell.h) and
- * TVD Runge–Kutta integrators (Shu & Osher 1988) are chosen by enums; the
- * dispatch happens once per sweep, outside the cell loops.  Grids carry a
- * ghost layer that these functions fill (zero-gradient boundary).
+ * Spatial schemes (numerical Hamiltonians, per cell in kernels/lsm_cell.h) and TVD
+ * Runge–Kutta integrators (Shu & Osher 1988; their tableaux in lsm_fields.c) are chosen by
+ * enums; a sweep dispatches once, outside its cell loop.  These sweeps are the C backend's
+ * cell ops (lsm_backend_c.c).
  */
 #ifndef LSM_SCHEME_H
 #define LSM_SCHEME_H
