@@ -35,7 +35,7 @@ check "--help score exits 0" [ $? -eq 0 ]
 case $out in "Usage: lsmorph score"*) ok ;; *) bad "--help score is not score's help: '$(printf '%s' "$out" | head -1)'" ;; esac
 # every help topic fits 80 columns; reconstruct's two screens (90 lines) and
 # names every option of reconstruct
-for topic in "" reconstruct score devices; do
+for topic in "" reconstruct score devices rules; do
   "$LSM" help $topic >"$TMP/help" 2>&1
   wide=$(awk 'length > 80 { print NR ": " $0; exit }' "$TMP/help")
   check "help $topic: a line over 80 columns: $wide" [ -z "$wide" ]
@@ -47,7 +47,7 @@ for opt in -o --output --input --invert --spacing --heights --heights-from-names
     --max-pixels --max-voxels --dz --per-iteration --format --values --nrrd-encoding --mesh \
     --no-slices --no-preview --method --interp --ends --align --scheme --time --cfl --max-iter \
     --reinit-every --reinit-iters --tol --particles-per-cell --pls-reseed --pls-radius-adjust \
-    --seed --threads --backend --device -q --quiet; do
+    --seed --rules-off --threads --backend --device -q --quiet; do
   check "help reconstruct does not list $opt" grep -q -e "[ ,]$opt[ ,]" "$TMP/help"
 done
 check "help reconstruct lists the methods" grep -q -e "--method ls|pls|blend " "$TMP/help"
@@ -718,5 +718,25 @@ check "full 0/1 slice: a note says non-zero pixels are foreground" grep -q "non-
 "$LSM" reconstruct "$TMP/labfull255" -o "$TMP/out-labfull255" --no-preview -q
 check "full 0/1 slice: same volume as the 0/255 stack" cmp -s "$TMP/out-labfull01/volume.nrrd" "$TMP/out-labfull255/volume.nrrd"
 check "full 0/255 slice: its output slice is full" sh -c "! cmp -s '$TMP/out-labfull255/slices/00002.png' '$TMP/out-labfull255/slices/00001.png'"
+
+
+# ---- reconstruction rules: help rules, --rules-off, run.json's options.rules_off ----------
+out=$("$LSM" help rules 2>&1)
+check "help rules exits 0" [ $? -eq 0 ]
+case $out in *"
+moving-parts
+  what: "*"
+end-floor
+  what: "*) ok ;; *) bad "help rules does not list moving-parts and end-floor" ;; esac
+check "default run.json: options.rules_off is []" grep -q '"rules_off": \[\]' "$OUT/run.json"
+"$LSM" reconstruct "$SET" -o "$TMP/out-rules" --input outline --heights "$SET/heights.txt" \
+  --dz 10 -q --no-preview --rules-off end-floor,pinhole-fill 2>"$TMP/e"
+check "--rules-off: exit 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+check "--rules-off: run.json lists them in table order" \
+  grep -q '"rules_off": \["pinhole-fill", "end-floor"\]' "$TMP/out-rules/run.json"
+"$LSM" reconstruct "$SET" -o "$TMP/x" --rules-off end-floor,no-such-rule >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--rules-off with an unknown name exits 2 (got $rc)" [ $rc -eq 2 ]
+check "--rules-off names the unknown rule" grep -q "'no-such-rule' is not a rule" "$TMP/e"
 
 finish

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/recon/lsm_rules.h"
+
 #define COUNT_OF(a) ((int)(sizeof(a) / sizeof *(a)))
 
 /* ---- the choices, from the lists that declare their enums ---------------------------- */
@@ -95,6 +97,8 @@ static const help_row reconstruct_rows[] = {
     CHOOSE("--align", align_names, "move slices by their convex-hull centroids:\n"
                                    "pairs whose shape moved (auto, the default),\n"
                                    "every pair (hull), or none"),
+    OPT("--rules-off NAME,...", "switch reconstruction rules off, for experiments\n"
+                               "('lsmorph help rules' lists them)"),
     CHOOSE("--scheme", scheme_names, "numerical Hamiltonian\n"
                                      "(default upwind; weno5 with --time rk3)"),
     CHOOSE("--time", time_names, "time integrator (default euler)"),
@@ -205,6 +209,7 @@ static const help_topic help_topics[] = {
     {"reconstruct", reconstruct_help},
     {"score", score_help},
     {"devices", devices_help},
+    {"rules", lsm_rules_print},
 };
 
 static const help_topic *find_topic(const char *name) {
@@ -471,6 +476,7 @@ static lsm_status reconstruct_option(arg_cursor *c, const char *name, const char
   else if (IS("--interp")) CHOICE(interp_names, so->interp);
   else if (IS("--ends")) CHOICE(ends_names, so->ends);
   else if (IS("--align")) CHOICE(align_names, so->align);
+  else if (IS("--rules-off")) CALL(lsm_rules_switch_off(&so->rules, v, err));
   else if (IS("--threads")) INT(1, 4096, cli->threads);
   else if (IS("--max-pixels")) CALL(parse_count(name, v, "pixels", &cli->max_pixels, err));
   else if (IS("--max-voxels")) CALL(parse_count(name, v, "voxels", &cli->max_voxels, err));
