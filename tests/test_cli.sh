@@ -35,7 +35,7 @@ check "--help score exits 0" [ $? -eq 0 ]
 case $out in "Usage: lsmorph score"*) ok ;; *) bad "--help score is not score's help: '$(printf '%s' "$out" | head -1)'" ;; esac
 # every help topic fits 80 columns; reconstruct's two screens (90 lines) and
 # names every option of reconstruct
-for topic in "" reconstruct score devices rules; do
+for topic in "" fill reconstruct score devices rules; do
   "$LSM" help $topic >"$TMP/help" 2>&1
   wide=$(awk 'length > 80 { print NR ": " $0; exit }' "$TMP/help")
   check "help $topic: a line over 80 columns: $wide" [ -z "$wide" ]

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/app/lsm_fill_cmd.h"
 #include "solver/recon/lsm_rules.h"
 
 #define COUNT_OF(a) ((int)(sizeof(a) / sizeof *(a)))
@@ -206,6 +207,7 @@ typedef struct help_topic {
 } help_topic;
 
 static const help_topic help_topics[] = {
+    {"fill", lsm_fill_help},
     {"reconstruct", reconstruct_help},
     {"score", score_help},
     {"devices", devices_help},
@@ -218,8 +220,8 @@ static const help_topic *find_topic(const char *name) {
   return NULL;
 }
 
-/* The topics joined: "reconstruct|score|devices" (prefix "", sep "|"), or
- * "help reconstruct, help score, ..." (prefix "help ", sep ", "). */
+/* The topics' names joined by sep, each after prefix: "fill, reconstruct, ..."
+ * or "help fill, help reconstruct, ...". */
 static void topic_list(char *out, size_t size, const char *prefix, const char *sep) {
   const char *names[COUNT_OF(help_topics)];
   char with_prefix[COUNT_OF(help_topics)][32];
@@ -232,22 +234,26 @@ static void topic_list(char *out, size_t size, const char *prefix, const char *s
 
 static void general_help(FILE *f) {
   char topics[128];
-  topic_list(topics, sizeof topics, "", "|");
+  topic_list(topics, sizeof topics, "", ", ");
   fprintf(f,
           "lsmorph " LSM_VERSION " - fill the gaps between sparse slices by level-set morphing\n"
           "\n"
           "Usage:\n"
+          "  lsmorph fill LABELS -o OUT [options]   (label volumes: .nii, .nii.gz, .nrrd)\n"
           "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
           "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
           "  lsmorph devices\n"
-          "  lsmorph --help [COMMAND] | --version | help %s\n"
+          "  lsmorph --help [TOPIC] | --version | help TOPIC\n"
           "\n"
           "Commands:\n"
+          "  fill          fill the slices between the drawn slices of a NIfTI or NRRD\n"
+          "                label map, every label at once\n"
           "  reconstruct   read PNG or TIFF slices, morph between consecutive slices,\n"
           "                write a volume\n"
           "  score         compare a reconstruction with full-resolution truth slices\n"
           "  devices       list the OpenCL platforms and devices\n"
           "\n"
+          "Help topics: %s.\n"
           "Run 'lsmorph help reconstruct' for the options.  Every option also takes the\n"
           "form --name=value; after '--' every argument is a folder (for names that\n"
           "start with '-').\n",
