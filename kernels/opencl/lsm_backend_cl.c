@@ -121,8 +121,7 @@ static const lsm_backend_ops cl_ops = {
     .pls_correct = cl_pls_correct,
 };
 
-const lsm_backend_entry lsm_backend_opencl_entry = {.name = "opencl",
-                                                    .host_threads = 0,
+const lsm_backend_entry lsm_backend_opencl_entry = {.host_threads = 0,
                                                     .open = cl_open,
                                                     .list_devices = lsm_cl_list_devices,
                                                     .ops = &cl_ops};

@@ -5,14 +5,23 @@
 #include <string.h>
 
 /* The reference first: "auto" tries the others in this order and falls back to it. */
-static const lsm_backend_entry *const backends[] = {&lsm_backend_c_entry,
-                                                    &lsm_backend_opencl_entry};
+typedef struct row {
+  const char *name;
+  const lsm_backend_entry *entry;
+} row;
+#define ROW(name, entry) {name, &entry},
+static const row backends[] = {LSM_BACKEND_TABLE(ROW)};
 enum { BACKEND_COUNT = (int)(sizeof backends / sizeof *backends) };
 
-const lsm_backend_entry *lsm_backend_find(const char *name) {
+static int find(const char *name) {
   for (int k = 0; name && k < BACKEND_COUNT; ++k)
-    if (strcmp(name, backends[k]->name) == 0) return backends[k];
-  return NULL;
+    if (strcmp(name, backends[k].name) == 0) return k;
+  return -1;
+}
+
+const lsm_backend_entry *lsm_backend_find(const char *name) {
+  const int k = find(name);
+  return k < 0 ? NULL : backends[k].entry;
 }
 
 void lsm_backend_names(char *buf, size_t size) {
@@ -21,25 +30,25 @@ void lsm_backend_names(char *buf, size_t size) {
   buf[0] = '\0';
   for (int k = 0; k <= BACKEND_COUNT && used < size; ++k) {
     const int n = snprintf(buf + used, size - used, "%s%s", k ? ", " : "",
-                           k < BACKEND_COUNT ? backends[k]->name : "auto");
+                           k < BACKEND_COUNT ? backends[k].name : "auto");
     if (n < 0) break;
     used += (size_t)n;
   }
 }
 
-static lsm_status open_entry(const lsm_backend_entry *e, int device, int threads,
-                             lsm_backend *b, lsm_err *err) {
-  b->entry = e;
+static lsm_status open_row(int k, int device, int threads, lsm_backend *b, lsm_err *err) {
+  b->name = backends[k].name;
+  b->entry = backends[k].entry;
   b->ctx = NULL;
-  return e->open(device, threads, &b->ctx, err);
+  return b->entry->open(device, threads, &b->ctx, err);
 }
 
 lsm_status lsm_backend_open(const char *name, int device, int threads, lsm_backend **out,
                             lsm_err *err) {
   *out = NULL;
   const int automatic = name && strcmp(name, "auto") == 0;
-  const lsm_backend_entry *want = automatic ? NULL : lsm_backend_find(name);
-  if (!automatic && !want) {
+  int want = automatic ? 0 : find(name);
+  if (want < 0) {
     char names[256];
     lsm_backend_names(names, sizeof names);
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "backend '%s' is not one of %s",
@@ -52,15 +61,14 @@ lsm_status lsm_backend_open(const char *name, int device, int threads, lsm_backe
     for (int k = 1; k < BACKEND_COUNT; ++k) {
       lsm_err why;
       lsm_err_clear(&why);
-      if (open_entry(backends[k], device, threads, b, &why) == LSM_OK) {
+      if (open_row(k, device, threads, b, &why) == LSM_OK) {
         *out = b;
         return LSM_OK;
       }
       snprintf(b->fallback, sizeof b->fallback, "%s", why.msg);
     }
-    want = backends[0];
   }
-  st = open_entry(want, device, threads, b, err);
+  st = open_row(want, device, threads, b, err);
   if (st != LSM_OK) {
     free(b);
     return st;
@@ -77,7 +85,7 @@ void lsm_backend_close(lsm_backend **backend) {
   *backend = NULL;
 }
 
-const char *lsm_backend_name(const lsm_backend *b) { return b->entry->name; }
+const char *lsm_backend_name(const lsm_backend *b) { return b->name; }
 const char *lsm_backend_fallback(const lsm_backend *b) { return b->fallback; }
 int lsm_backend_host_threads(const lsm_backend *b) { return b->entry->host_threads; }
 
@@ -109,9 +117,9 @@ const char *lsm_backend_device(const lsm_backend *b) {
 lsm_status lsm_backend_list_devices(FILE *f, lsm_err *err) {
   lsm_status st = lsm_fail(err, LSM_ERR_UNSUPPORTED, NULL, "no backend lists devices");
   for (int k = 0; k < BACKEND_COUNT; ++k)
-    if (backends[k]->list_devices) {
+    if (backends[k].entry->list_devices) {
       lsm_err_clear(err);
-      st = backends[k]->list_devices(f, err);
+      st = backends[k].entry->list_devices(f, err);
       if (st != LSM_OK) return st;
     }
   return st;

@@ -95,7 +95,6 @@ typedef struct lsm_backend_ops {
 
 /* One row of the table of backends. */
 typedef struct lsm_backend_entry {
-  const char *name;          /* --backend NAME; run.json's backend.name */
   int host_threads;          /* 1: the cell loops run on the host's threads */
   /* Opens the run-wide context; device: an index of list_devices (-1: the default). */
   lsm_status (*open)(int device, int threads, void **ctx, lsm_err *err);
@@ -104,12 +103,19 @@ typedef struct lsm_backend_entry {
   const lsm_backend_ops *ops;
 } lsm_backend_entry;
 
-/* The table's rows (lsm_backend.c): the C reference first. */
-extern const lsm_backend_entry lsm_backend_c_entry;      /* solver/pde/lsm_backend_c.c */
-extern const lsm_backend_entry lsm_backend_opencl_entry; /* kernels/opencl/lsm_backend_cl.c */
+/* The table of backends, X(name, row): --backend NAME and run.json's backend.name; the C
+ * reference first.  lsm_backend.c builds the table from it, the command line its names
+ * (LSM_BACKEND_NAME, then "auto"). */
+#define LSM_BACKEND_TABLE(X)                                                   \
+  X("c", lsm_backend_c_entry)           /* solver/pde/lsm_backend_c.c */      \
+  X("opencl", lsm_backend_opencl_entry) /* kernels/opencl/lsm_backend_cl.c */
+#define LSM_BACKEND_NAME(name, row) name,
+#define LSM_BACKEND_ROW_DECL(name, row) extern const lsm_backend_entry row;
+LSM_BACKEND_TABLE(LSM_BACKEND_ROW_DECL)
 
 /* An open backend: read it through the functions below. */
 typedef struct lsm_backend {
+  const char *name;
   const lsm_backend_entry *entry;
   void *ctx;                      /* the backend's run-wide context, owned */
   char fallback[LSM_ERR_MSG_MAX]; /* "auto" on the reference: why no other opened */

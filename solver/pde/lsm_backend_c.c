@@ -180,4 +180,4 @@ static const lsm_backend_ops c_ops = {
 };
 
 const lsm_backend_entry lsm_backend_c_entry = {
-    .name = "c", .host_threads = 1, .open = c_open, .list_devices = NULL, .ops = &c_ops};
+    .host_threads = 1, .open = c_open, .list_devices = NULL, .ops = &c_ops};

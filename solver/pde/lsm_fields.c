@@ -3,7 +3,7 @@
 #include <stdlib.h>
 
 struct lsm_fields {
-  const lsm_backend_entry *entry;
+  const char *name; /* the backend's */
   const lsm_backend_ops *ops;
   void *state;
   int particles; /* a set is loaded: it takes every stage */
@@ -48,8 +48,8 @@ lsm_status lsm_fields_create(const lsm_backend *backend, const lsm_grid *phi_sou
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "fields: source and target sizes differ");
   lsm_fields *f = calloc(1, sizeof *f);
   if (!f) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a pair's fields");
-  f->entry = backend ? backend->entry : &lsm_backend_c_entry;
-  f->ops = f->entry->ops;
+  f->name = backend ? backend->name : "c";
+  f->ops = backend ? backend->entry->ops : lsm_backend_c_entry.ops;
   lsm_status st = f->ops->create(backend ? backend->ctx : NULL, phi_source, phi_target,
                                  threads < 1 ? 1 : threads, &f->state, err);
   if (st != LSM_OK) {
@@ -67,7 +67,7 @@ void lsm_fields_destroy(lsm_fields **fields) {
   *fields = NULL;
 }
 
-const char *lsm_fields_backend_name(const lsm_fields *f) { return f->entry->name; }
+const char *lsm_fields_backend_name(const lsm_fields *f) { return f->name; }
 
 lsm_status lsm_fields_cfl_dt(lsm_fields *f, lsm_scheme scheme, double cfl, double *dt,
                              lsm_err *err) {
@@ -136,7 +136,7 @@ lsm_status lsm_fields_pls_load(lsm_fields *f, const lsm_pls_view *set, int radiu
                                lsm_err *err) {
   if (!lsm_fields_has_particles(f))
     return lsm_fail(err, LSM_ERR_UNSUPPORTED, NULL,
-                    "--method pls: the %s backend cannot run particles", f->entry->name);
+                    "--method pls: the %s backend cannot run particles", f->name);
   LSM_TRY(f->ops->pls_load(f->state, set, radius_adjust, err));
   f->particles = 1;
   return LSM_OK;
@@ -145,6 +145,6 @@ lsm_status lsm_fields_pls_load(lsm_fields *f, const lsm_pls_view *set, int radiu
 lsm_status lsm_fields_pls_correct(lsm_fields *f, lsm_pls_stats *stats, lsm_err *err) {
   if (!f->particles)
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "particles: no set loaded on the %s backend",
-                    f->entry->name);
+                    f->name);
   return f->ops->pls_correct(f->state, stats, err);
 }
