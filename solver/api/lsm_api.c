@@ -52,11 +52,11 @@ static int finish(lsm_status st, const lsm_err *err, char *message, size_t size)
 /* The stack options and backend the public options ask for; ends_given: the
  * caller chose the end rule. */
 static lsm_status stack_options(const lsmorph_options *o, lsm_stack_opts *so, int *ends_given,
-                                int *threads, lsm_backend_kind *backend, lsm_err *err) {
+                                int *threads, const char **backend, lsm_err *err) {
   lsm_stack_opts_default(so);
   *ends_given = 0;
   *threads = 0;
-  *backend = LSM_BACKEND_C;
+  *backend = "c";
   if (!o) return LSM_OK;
   if (o->size != sizeof *o)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "options: fill them with lsmorph_options_default");
@@ -74,8 +74,7 @@ static lsm_status stack_options(const lsmorph_options *o, lsm_stack_opts *so, in
   if (o->scheme) so->morph.scheme = (lsm_scheme)v;
   ENUM_OPTION(time, lsm_time_from_name, v, "time", "euler, rk2, rk3");
   if (o->time) so->morph.time = (lsm_time)v;
-  ENUM_OPTION(backend, lsm_backend_kind_from_name, v, "backend", "c, opencl, auto");
-  if (o->backend) *backend = (lsm_backend_kind)v;
+  if (o->backend) *backend = o->backend; /* lsm_backend_open checks the name */
   if (!(o->cfl > 0.0) || !isfinite(o->cfl))
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "cfl: %g must be positive", o->cfl);
   if (o->max_iter < 1 || o->reinit_every < 0 || o->reinit_iters < 1 || o->reinit_iters > 100000 ||
@@ -101,7 +100,7 @@ typedef struct run_env {
   int threads, previous;
 } run_env;
 
-static lsm_status env_begin(run_env *e, lsm_backend_kind kind, int device, int threads,
+static lsm_status env_begin(run_env *e, const char *kind, int device, int threads,
                             lsm_err *err) {
   e->previous = omp_get_max_threads();
   e->threads = threads > 0 ? threads : omp_get_num_procs();
@@ -140,7 +139,7 @@ int lsmorph_fill(void *labels, lsmorph_dtype dtype, const size_t n[3], const dou
   o.n_slices = slices ? n_slices : 0;
   o.labels = fill_labels;
   o.n_labels = fill_labels ? n_labels : 0;
-  lsm_backend_kind kind;
+  const char *kind = "c";
   lsm_status st = stack_options(options, &o.stack, &o.ends_given, &o.threads, &kind, &err);
   run_env env;
   memset(&env, 0, sizeof env);
@@ -207,7 +206,7 @@ int lsmorph_reconstruct(const uint8_t *masks, size_t count, size_t width, size_t
                   &err, message, message_size);
   lsm_stack_opts so;
   int ends_given = 0, threads = 0;
-  lsm_backend_kind kind;
+  const char *kind = "c";
   lsm_status st = stack_options(options, &so, &ends_given, &threads, &kind, &err);
   so.pixel_dx = dx;
   so.pixel_dy = dy;

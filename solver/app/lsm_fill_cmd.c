@@ -474,8 +474,9 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
     st = lsm_backend_open(a->shared.backend, a->shared.device, o.threads, &backend, err);
     if (st == LSM_OK) {
       o.stack.morph.backend = backend;
-      if (!quiet && backend->fallback[0])
-        fprintf(stderr, "lsmorph: note: --backend auto runs on C: %s\n", backend->fallback);
+      if (!quiet && lsm_backend_fallback(backend)[0])
+        fprintf(stderr, "lsmorph: note: --backend auto runs on C: %s\n",
+                lsm_backend_fallback(backend));
     }
   }
   lsm_fill_stats stats;
