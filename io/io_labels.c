@@ -100,6 +100,18 @@ void lsm_labels_affine(const lsm_label_file *f, double m[3][4]) {
   memcpy(m, f->affine, sizeof f->affine);
 }
 
+lsm_status lsm_labels_sized(lsm_label_file *f, lsm_voxel_type type, uint64_t max_voxels,
+                            lsm_err *err) {
+  f->vox.type = type;
+  size_t count = 0;
+  LSM_TRY(lsm_voxels_count(f->vox.n, type, &count, f->path, err));
+  if (max_voxels && count > max_voxels)
+    return lsm_fail(err, LSM_ERR_LIMIT, f->path,
+                    "%zu x %zu x %zu = %zu voxels, more than --max-voxels %llu", f->vox.n[0],
+                    f->vox.n[1], f->vox.n[2], count, (unsigned long long)max_voxels);
+  return LSM_OK;
+}
+
 void lsm_labels_spacing_from_affine(lsm_label_file *f) {
   for (int a = 0; a < 3; ++a) {
     const double x = f->affine[0][a], y = f->affine[1][a], z = f->affine[2][a];

