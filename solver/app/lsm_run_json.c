@@ -60,7 +60,7 @@ static void write_options(FILE *f, const lsm_run_record *run) {
   lsm_json_number(f, lsm_stack_output_dz(o));
   fprintf(f, ", \"invert\": %s, \"heights_from_names\": %s, \"threads\": %d, \"values\": ",
           json_bool(cli->invert), json_bool(cli->heights_from_names), run->threads);
-  lsm_json_string(f, lsm_values_name((lsm_values)cli->values));
+  lsm_json_string(f, lsm_values_name(cli->values));
   fputs(", \"formats\": [", f);
   int listed = 0;
   for (unsigned bit = 1; bit <= LSM_FORMAT_ALL; bit <<= 1) {
@@ -72,7 +72,7 @@ static void write_options(FILE *f, const lsm_run_record *run) {
   fprintf(f, "], \"nrrd_encoding\": \"%s\", \"mesh\": %s, \"preview\": %s, "
           "\"particles_per_cell\": %d, \"pls_reseed\": %d, \"pls_radius_adjust\": %s, "
           "\"seed\": %" PRIu64 "},\n",
-          cli->nrrd_gzip ? "gzip" : "raw", json_bool(cli->mesh),
+          lsm_nrrd_encoding_name(cli->nrrd_encoding), json_bool(cli->mesh),
           json_bool(cli->preview), pls->particles_per_cell, pls->reseed_every,
           json_bool(pls->radius_adjust), pls->seed);
 }
