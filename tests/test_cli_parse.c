@@ -19,7 +19,7 @@ static void test_reconstruct_defaults(void **state) {
   assert_int_equal(parse(&cli, &err, 5, argv), LSM_OK);
   assert_int_equal(cli.command, LSM_CMD_RECONSTRUCT);
   assert_int_equal(cli.device, -1);
-  assert_int_equal(cli.backend, LSM_BACKEND_C);
+  assert_string_equal(cli.backend, "c");
   assert_true(cli.spacing == 1.0);
   assert_int_equal(cli.threads, 0);
   assert_true(cli.max_pixels == (uint64_t)1 << 28);
@@ -154,11 +154,11 @@ static void test_choices(void **state) {
     assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
     assert_int_equal(cli.stack.morph.scheme, k);
   }
-  for (int k = 0; k < LSM_BACKEND_COUNT; ++k) {
-    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
-                    "--backend", (char *)lsm_backend_kind_name((lsm_backend_kind)k)};
+  static const char *const backends[] = {LSM_BACKEND_TABLE(LSM_BACKEND_NAME) "auto"};
+  for (size_t k = 0; k < sizeof backends / sizeof *backends; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--backend", (char *)backends[k]};
     assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
-    assert_int_equal(cli.backend, k);
+    assert_string_equal(cli.backend, backends[k]);
   }
   for (int k = 0; k < LSM_VALUES_COUNT; ++k) {
     char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",

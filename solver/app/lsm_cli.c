@@ -23,7 +23,7 @@ static const char *const time_names[] = {LSM_TIME_LIST(LSM_ENUM_TEXT)};
 static const char *const interp_names[] = {LSM_INTERP_LIST(LSM_ENUM_TEXT)};
 static const char *const ends_names[] = {LSM_ENDS_LIST(LSM_ENUM_TEXT)};
 static const char *const align_names[] = {LSM_ALIGN_LIST(LSM_ENUM_TEXT)};
-static const char *const backend_names[] = {LSM_BACKEND_LIST(LSM_ENUM_TEXT)};
+static const char *const backend_names[] = {LSM_BACKEND_TABLE(LSM_BACKEND_NAME) "auto"};
 
 LSM_NAME_FUNCTIONS(lsm_nrrd_encoding, LSM_NRRD_ENCODING_LIST, lsm_nrrd_encoding_name,
                    lsm_nrrd_encoding_from_name)
@@ -415,6 +415,7 @@ static void cli_defaults(lsm_cli *cli) {
   cli->nrrd_encoding = LSM_NRRD_RAW;
   cli->mesh = 0;
   cli->preview = 1;
+  cli->backend = "c";
   cli->device = -1; /* the first GPU, else the first device */
   lsm_stack_opts_default(&cli->stack);
 }
@@ -477,7 +478,11 @@ static lsm_status reconstruct_option(arg_cursor *c, const char *name, const char
   else if (IS("--pls-reseed")) INT(0, INT_MAX, so->morph.pls.reseed_every);
   else if (IS("--pls-radius-adjust")) so->morph.pls.radius_adjust = 1;
   else if (IS("--seed")) CALL(parse_seed(v, &so->morph.pls.seed, err));
-  else if (IS("--backend")) CHOICE(backend_names, cli->backend);
+  else if (IS("--backend")) {
+    int row = 0;
+    CHOICE(backend_names, row);
+    cli->backend = backend_names[row];
+  }
   else if (IS("--device")) INT(0, 1000, cli->device);
   else if (IS("--interp")) CHOICE(interp_names, so->interp);
   else if (IS("--ends")) CHOICE(ends_names, so->ends);
@@ -674,7 +679,7 @@ void lsm_cli_note_unused(const lsm_cli *cli, FILE *f) {
   if (!cli->stack.per_iteration && cli->tol_given)
     fprintf(f, "lsmorph: note: --tol has no effect without --per-iteration (it stops "
                "each pair of that mode)\n");
-  if (cli->backend == LSM_BACKEND_C && cli->device_given)
+  if (strcmp(cli->backend, "c") == 0 && cli->device_given)
     fprintf(f, "lsmorph: note: --device has no effect with --backend c\n");
   if (cli->nrrd_encoding_given && !(cli->formats & LSM_FORMAT_NRRD))
     fprintf(f, "lsmorph: note: --nrrd-encoding has no effect without nrrd in --format\n");

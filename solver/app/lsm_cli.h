@@ -48,7 +48,7 @@ typedef struct lsm_cli {
   uint64_t max_pixels;       /* per slice */
   uint64_t max_voxels;       /* output volume (checked as written with --per-iteration) */
   int write_slices;          /* PNG masks of every output slice */
-  lsm_backend_kind backend;  /* --backend (default c) */
+  const char *backend;       /* --backend NAME: a row of lsm_backend.h's table, or "auto" (default "c") */
   int device;                /* --device N (-1: first GPU, else first device) */
   unsigned formats;          /* --format: set of LSM_FORMAT_* bits (io/lsm_io.h) */
   lsm_values values;         /* --values */

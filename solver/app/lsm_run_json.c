@@ -10,15 +10,23 @@
 
 static const char *json_bool(int value) { return value ? "true" : "false"; }
 
-/* "backend": where the grid work ran. */
+/* "backend": where the grid work ran: its name and the facts it reports (every backend:
+ * device, build_seconds, kernel_cache_hit). */
 static void write_backend(FILE *f, const lsm_backend *backend) {
   fputs("  \"backend\": {\"name\": ", f);
-  lsm_json_string(f, backend->ops->name);
-  fputs(", \"device\": ", f);
-  lsm_json_string(f, backend->device);
-  fputs(", \"build_seconds\": ", f);
-  lsm_json_number(f, backend->build_seconds);
-  fprintf(f, ", \"kernel_cache_hit\": %s},\n", json_bool(backend->kernel_cache_hit));
+  lsm_json_string(f, lsm_backend_name(backend));
+  lsm_backend_fact facts[LSM_BACKEND_FACTS_MAX];
+  const int n = lsm_backend_facts(backend, facts, LSM_BACKEND_FACTS_MAX);
+  for (int k = 0; k < n; ++k) {
+    fprintf(f, ", \"%s\": ", facts[k].key);
+    if (facts[k].kind == LSM_FACT_TEXT)
+      lsm_json_string(f, facts[k].text);
+    else if (facts[k].kind == LSM_FACT_NUMBER)
+      lsm_json_number(f, facts[k].number);
+    else
+      fputs(json_bool(facts[k].flag), f);
+  }
+  fputs("},\n", f);
 }
 
 /* "options": every option as the run used it. */
