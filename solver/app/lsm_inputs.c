@@ -228,6 +228,14 @@ static lsm_status slice_files_load(void *ctx, size_t index, lsm_mask *out, lsm_e
   return LSM_OK;
 }
 
+void lsm_slice_files_free(lsm_slice_files *src) {
+  free(src->blank);
+  lsm_path_list_free(src->paths, src->count);
+  src->blank = NULL;
+  src->paths = NULL;
+  src->count = 0;
+}
+
 void lsm_inputs_note_blank(const lsm_slice_files *src, const char *dir) {
   if (!src->blank) return;
   size_t first = SIZE_MAX, last = 0, between = 0, example = 0;

@@ -43,6 +43,9 @@ void lsm_inputs_note(const lsm_cli *cli, const lsm_slice_files *src);
  * points to `lsmorph fill`. */
 void lsm_inputs_note_blank(const lsm_slice_files *src, const char *dir);
 
+/* Frees the paths and the blank flags. */
+void lsm_slice_files_free(lsm_slice_files *src);
+
 /* The files as the stack driver's source (it must outlive the run); each load
  * first checks for a stop signal. */
 lsm_slice_source lsm_slice_files_source(lsm_slice_files *src, const double *z);

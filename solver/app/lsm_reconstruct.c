@@ -79,7 +79,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   if (st == LSM_OK && src.count < 2)
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "need at least two PNG or TIFF slices");
   if (st == LSM_OK && (size_t)transport->rank >= src.count - 1) { /* no gap of its own */
-    lsm_path_list_free(src.paths, src.count);
+    lsm_slice_files_free(&src);
     return LSM_OK;
   }
   if (st == LSM_OK) st = lsm_input_heights(cli, src.paths, src.count, &z, err);
@@ -112,8 +112,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   lsm_backend_close(&backend);
   free(stats);
   free(z);
-  free(src.blank);
-  lsm_path_list_free(src.paths, src.count);
+  lsm_slice_files_free(&src);
   return st;
 }
 
@@ -267,7 +266,6 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   lsm_backend_close(&backend);
   free(stats);
   free(z);
-  free(src.blank);
-  lsm_path_list_free(src.paths, src.count);
+  lsm_slice_files_free(&src);
   return st;
 }
