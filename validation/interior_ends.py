@@ -7,7 +7,7 @@ lsmorph ends a part of the object in two ways (README, method item 7):
     section whole at mid-gap closing in a tip at the empty slice);
   - beside: the slice on the other side still holds something else, far away,
     and the part has no counterpart there; the halfway rule for components
-    (cap_unmatched in solver/recon/lsm_stack.c) closes it by mid-gap, a paraboloid
+    (lsm_cap_unmatched in solver/recon/lsm_unmatched.c) closes it by mid-gap, a paraboloid
     cap, inside the ordinary morph and cubic.
 This script puts each analytic solid of end_offsets.py on a wider canvas,
 once alone and once with a bar in every slice, 90 px to its right (farther

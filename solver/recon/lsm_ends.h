@@ -16,7 +16,7 @@
  *     z-slope of phi from the slice N beyond F (in that pair's frame, which
  *     also keeps moving: the stack driver's frame), the gap N -> F's secant.
  *     The spline on the other side of F leaves it with the three-point slope
- *     through F, N and M instead (lsm_stack's gap_slopes), steeper where the
+ *     through F, N and M instead (lsm_zprofile_slopes), steeper where the
  *     profile is curved, so the surface has a crease at F there: continuing
  *     the end with that slope too closed ends faster than the real sets want
  *     (validation/measurements/organs.md, session 29).  Where the shape grows

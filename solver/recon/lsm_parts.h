@@ -7,7 +7,7 @@
  * itself on the other side, and a morph in place would shrink it away and
  * grow it again beside.  lsm_parts_moved finds such parts, pairs them, and
  * gives the shift between their centres; the stack driver then moves each
- * pair along that shift (solver/recon/lsm_stack.c).
+ * pair along that shift (solver/recon/lsm_gap.c).
  *
  * A part (an 8-connected component) of A and one of B are paired only when
  * all of these hold, so that nothing ambiguous moves:

@@ -1,7 +1,7 @@
 /* lsm_pchip: the slopes of a monotone piecewise cubic Hermite interpolant
- * (PCHIP, Fritsch & Carlson 1980; Fritsch & Butland 1984), pure functions.
- * lsm_stack uses them for the z-profile through the slices and for the
- * centroid path of aligned pairs. */
+ * (PCHIP, Fritsch & Carlson 1980; Fritsch & Butland 1984) and the cubic
+ * Hermite basis, pure functions.  The z-profile through the slices
+ * (lsm_zprofile) and the centroid path of aligned pairs (lsm_frame) use them. */
 #ifndef LSM_PCHIP_H
 #define LSM_PCHIP_H
 
@@ -34,6 +34,16 @@ static inline double lsm_pchip_edge_slope(double h0, double h1, double d0, doubl
   if (!lsm_same_sign(m, d0)) return 0.0;
   if (lsm_same_sign(d0, -d1) && fabs(m) > 3.0 * fabs(d0)) return 3.0 * d0;
   return m;
+}
+
+/* Cubic Hermite basis on s in [0, 1]. */
+static inline void lsm_hermite_basis(double s, double *h00, double *h10, double *h01,
+                                     double *h11) {
+  const double s2 = s * s, s3 = s2 * s;
+  *h00 = 2 * s3 - 3 * s2 + 1;
+  *h10 = s3 - 2 * s2 + s;
+  *h01 = -2 * s3 + 3 * s2;
+  *h11 = s3 - s2;
 }
 
 #endif

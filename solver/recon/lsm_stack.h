@@ -1,38 +1,26 @@
-/* lsm_stack: the stack driver.  Walks the input slices in height order, morphs
- * (or blends) each consecutive pair, and hands every output slice to a sink,
- * one at a time: at most the current pair and its working grids are in memory.
+/* lsm_stack: the stack driver.  Walks the input slices in height order, fills
+ * each gap between consecutive slices and hands every output slice to a sink,
+ * one at a time: at most a few gaps' slices and working grids are in memory.
+ *
+ * The data flow, module by module (solver/recon/README.md):
+ *   lsm_slice      input slices, the window of four around a gap, their
+ *                  signed distances (solver/sdf) on a working canvas
+ *   lsm_frame      alignment: whether a pair moved, the gap's frame
+ *   lsm_gap        a gap's working fields: moving parts (lsm_parts), parts
+ *                  with no counterpart (lsm_unmatched), z-slopes (lsm_zprofile)
+ *   lsm_gap_run    the gap's slices: the two-sided pair morph (lsm_two_sided,
+ *                  solver/pde), the blend, or an end (lsm_ends)
+ *   lsm_zprofile   the monotone cubic z-profile through the four nearest slices
+ *   lsm_emit       to the sink: pinholes filled (lsm_pinholes), zero ties broken
+ *   lsm_schedule   gaps as tasks on threads or MPI ranks, output in stack order
  *
  * Output heights (default mode): the regular grid z0, z0 + dz, ... up to the
  * last input height.  An output height on an input height gets that input
  * slice exactly; a height a fraction s of the way through a gap gets the morph
  * at time t(s) = -ln(1 - s) (lsm_morph_time_of_fraction), or the blend
- * (1 - s) phi_A + s phi_B.
+ * (1 - s) phi_A + s phi_B, with the cubic profile's shape.
  * Per-iteration mode (the document's, §3.6–3.8): every solver iteration of a
  * pair is a slice, at heights linspace(z_A, z_B, k + 2).
- *
- * Alignment (§3.2, §3.9): each slice of a pair is shifted by whole pixels so
- * the centroid of the convex hull of its foreground sits at the image centre,
- * on a canvas padded so nothing is clipped; an intermediate slice at fraction
- * s is shifted back by (1 - s) d_A + s d_B (bilinear resampling of phi), so
- * centroids travel on the straight segment between the two slices' (or on the
- * monotone cubic through the neighbouring slices' centroids, --interp cubic).
- * Auto alignment (the default) applies this to a pair only when its shape
- * moved: the two overlap little in place (IoU < 1/2), shifting the source by
- * the centroid difference makes it overlap the target more, the translation
- * of largest overlap (lsm_register) lies nearer the centroid difference than
- * no shift, and either the two barely touch in place (overlap < 1/10 of the
- * smaller) and that translation makes them somewhat alike (IoU >= 1/4), or it
- * makes them alike (IoU >= 1/2 and 1.5 times the IoU in place).  A pair whose
- * shape changed (a branch or an ear growing out moves the centroid without
- * moving the object; a narrow part next to a wide body fits inside it at many
- * shifts; a small part ends while a large one begins elsewhere) is not
- * aligned.
- *
- * Moving parts (ls and pls, mask input, unaligned pairs): components that
- * moved off their place by the next slice, paired by lsm_parts, are taken
- * out of the morph; each pair travels the straight line between its centres
- * as the blend of its two parts moved to the same place, joined to the rest
- * by the minimum.
  *
  * Empty slices: the object is absent there.  Next to a non-empty slice A the
  * object keeps A's section at most up to mid-gap.  With the linear profile it
@@ -40,8 +28,7 @@
  * (1-s) phi_A + s R for the blend, R the depth of A's deepest point; per
  * iteration the morph toward the constant R / ln 2).  With the cubic profile
  * the end follows the trend of the slices before A, and a section still whole
- * at mid-gap closes in a tip at the empty slice (lsm_ends.h; README, method
- * item 7).
+ * at mid-gap closes in a tip at the empty slice (lsm_ends.h).
  */
 #ifndef LSM_STACK_H
 #define LSM_STACK_H

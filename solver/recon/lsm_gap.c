@@ -1,0 +1,178 @@
+/* lsm_gap: a gap's working fields (see the header). */
+#include "solver/recon/lsm_gap.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "solver/recon/lsm_ends.h"
+#include "solver/recon/lsm_parts.h"
+#include "solver/recon/lsm_unmatched.h"
+#include "solver/recon/lsm_zprofile.h"
+
+void lsm_gap_free(lsm_gap *g) {
+  lsm_grid_destroy(&g->phi_a);
+  lsm_grid_destroy(&g->phi_b);
+  lsm_grid_destroy(&g->slope_a);
+  lsm_grid_destroy(&g->slope_b);
+  for (int k = 0; k < g->parts; ++k) {
+    lsm_grid_destroy(&g->part_a[k]);
+    lsm_grid_destroy(&g->part_b[k]);
+  }
+  g->parts = 0;
+}
+
+/* Margin, in pixels, of the window around a moving part where its phi is
+ * kept; farther out the output keeps the rest's phi (the zero level is
+ * exact, |phi| there may exceed the distance to the part). */
+#define LSM_PART_MARGIN 16
+
+/* phi of one part on the window around it (bounding box + margin, within
+ * the image); *ox, *oy: the window's origin on the image. */
+static lsm_status part_phi(const lsm_mask *part, const lsm_stack_opts *o, lsm_grid **phi, int *ox,
+                           int *oy, lsm_err *err) {
+  int x0 = 0, y0 = 0, x1 = part->width - 1, y1 = part->height - 1;
+  lsm_mask_bounds(part, &x0, &y0, &x1, &y1); /* a part is never empty */
+  x0 = x0 - LSM_PART_MARGIN < 0 ? 0 : x0 - LSM_PART_MARGIN;
+  y0 = y0 - LSM_PART_MARGIN < 0 ? 0 : y0 - LSM_PART_MARGIN;
+  x1 = x1 + LSM_PART_MARGIN >= part->width ? part->width - 1 : x1 + LSM_PART_MARGIN;
+  y1 = y1 + LSM_PART_MARGIN >= part->height ? part->height - 1 : y1 + LSM_PART_MARGIN;
+  *ox = x0;
+  *oy = y0;
+  LSM_TRY(lsm_grid_create(x1 - x0 + 1, y1 - y0 + 1, (float)o->pixel_dx, (float)o->pixel_dy, phi,
+                          err));
+  return lsm_mask_phi(part, LSM_INPUT_MASK, -x0, -y0, *phi, err);
+}
+
+/* Parts that moved (see lsm_parts.h): for an unaligned pair of two non-empty
+ * mask slices, each pair of parts found is taken out of phi_A and phi_B and
+ * moved on its own: at fraction s its phi is the blend of A's part moved by
+ * s d and B's part moved back by (1 - s) d, so it travels the straight line
+ * between the two centres instead of vanishing and growing again beside.
+ * Unless both slices have nothing else left, the rest must keep something on
+ * each side (else nothing moves: the halfway rule handles a side with
+ * nothing). */
+static lsm_status gap_parts(const lsm_stack_opts *o, int width, int height, const lsm_window *w,
+                            lsm_gap *g, lsm_err *err) {
+  const lsm_slice *a = w->s[1], *b = w->s[2];
+  lsm_part_move mv[LSM_PARTS_MAX];
+  int count = 0;
+  LSM_TRY(lsm_parts_moved(&a->filled, &b->filled, mv, &count, err));
+  if (count == 0) return LSM_OK;
+  lsm_mask rest_a = {0, 0, NULL}, rest_b = {0, 0, NULL};
+  lsm_status st = lsm_mask_create(width, height, &rest_a, err);
+  if (st == LSM_OK) st = lsm_mask_create(width, height, &rest_b, err);
+  size_t left_a = 0, left_b = 0;
+  if (st == LSM_OK) {
+    const size_t cells = (size_t)width * (size_t)height;
+    for (size_t p = 0; p < cells; ++p) {
+      uint8_t in_a = a->filled.pixels[p], in_b = b->filled.pixels[p];
+      for (int k = 0; k < count; ++k) {
+        in_a &= (uint8_t)!mv[k].part_a.pixels[p];
+        in_b &= (uint8_t)!mv[k].part_b.pixels[p];
+      }
+      rest_a.pixels[p] = in_a;
+      rest_b.pixels[p] = in_b;
+      left_a += in_a;
+      left_b += in_b;
+    }
+  }
+  const int usable = st == LSM_OK && (left_a > 0) == (left_b > 0);
+  for (int k = 0; usable && st == LSM_OK && k < count; ++k) {
+    g->parts = k + 1;
+    g->part_dx[k] = mv[k].dx;
+    g->part_dy[k] = mv[k].dy;
+    st = part_phi(&mv[k].part_a, o, &g->part_a[k], &g->part_ax[k], &g->part_ay[k], err);
+    if (st == LSM_OK)
+      st = part_phi(&mv[k].part_b, o, &g->part_b[k], &g->part_bx[k], &g->part_by[k], err);
+  }
+  if (usable && st == LSM_OK) {
+    g->rest_empty = left_a == 0;
+    st = lsm_mask_phi(&rest_a, LSM_INPUT_MASK, g->f.pad, g->f.pad_y, g->phi_a, err);
+    if (st == LSM_OK) st = lsm_mask_phi(&rest_b, LSM_INPUT_MASK, g->f.pad, g->f.pad_y, g->phi_b, err);
+  }
+  lsm_mask_free(&rest_a);
+  lsm_mask_free(&rest_b);
+  for (int k = 0; k < count; ++k) lsm_part_move_free(&mv[k]);
+  return st;
+}
+
+/* Adds the moving parts to an output slice at fraction s (union: min), over
+ * the two parts' windows as moved to s. */
+void lsm_gap_paste_parts(const lsm_gap *g, double s, float *out) {
+  const lsm_frame *f = &g->f;
+  for (int k = 0; k < g->parts; ++k) {
+    const lsm_grid *pa = g->part_a[k], *pb = g->part_b[k];
+    /* A's window moved forward by s d, B's back by (1 - s) d */
+    const double ax = g->part_ax[k] + s * g->part_dx[k], ay = g->part_ay[k] + s * g->part_dy[k];
+    const double bx = g->part_bx[k] - (1.0 - s) * g->part_dx[k];
+    const double by = g->part_by[k] - (1.0 - s) * g->part_dy[k];
+    int x0 = (int)floor(fmin(ax, bx)), y0 = (int)floor(fmin(ay, by));
+    int x1 = (int)ceil(fmax(ax + pa->nx - 1, bx + pb->nx - 1));
+    int y1 = (int)ceil(fmax(ay + pa->ny - 1, by + pb->ny - 1));
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 > f->width - 1) x1 = f->width - 1;
+    if (y1 > f->height - 1) y1 = f->height - 1;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        float v = (float)((1.0 - s) * lsm_grid_sample(pa, x - ax, y - ay) +
+                          s * lsm_grid_sample(pb, x - bx, y - by));
+        if (v > f->clamp) v = f->clamp;
+        float *o = &out[(size_t)y * f->width + x];
+        if (v < *o) *o = v;
+      }
+  }
+}
+
+lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const lsm_window *w,
+                         lsm_gap *g, lsm_err *err) {
+  memset(g, 0, sizeof *g);
+  const lsm_slice *a = w->s[1], *b = w->s[2];
+  LSM_TRY(lsm_frame_setup(&g->f, w, o->align, o->interp, width, height, o->pixel_dx,
+                          o->pixel_dy, err));
+  const int nx = width + 2 * g->f.pad, ny = height + 2 * g->f.pad_y;
+  const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
+  lsm_status st = lsm_grid_create(nx, ny, hx, hy, &g->phi_a, err);
+  if (st == LSM_OK) st = lsm_grid_create(nx, ny, hx, hy, &g->phi_b, err);
+  if (st == LSM_OK) st = lsm_slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad_y - g->f.dy[1], g->phi_a, err);
+  if (st == LSM_OK) st = lsm_slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad_y - g->f.dy[2], g->phi_b, err);
+  if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
+      o->input == LSM_INPUT_MASK && !o->per_iteration && !g->f.aligned)
+    st = gap_parts(o, width, height, w, g, err);
+  const int caps = !a->empty && !b->empty && o->method != LSM_METHOD_BLEND && !g->rest_empty;
+  const int slopes = o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration &&
+                     !g->rest_empty;
+  /* phi of the non-empty neighbours, prev in A's place and next in B's: read
+   * by the branch test of cap_unmatched, then made secants by gap_slopes */
+  lsm_grid *beyond[2] = {NULL, NULL};
+  for (int side = 0; side < 2 && st == LSM_OK && (caps || slopes); ++side) {
+    const int k = side ? 3 : 0;
+    if (!lsm_window_usable(w, k)) continue;
+    st = lsm_grid_create(nx, ny, hx, hy, &beyond[side], err);
+    if (st == LSM_OK)
+      st = lsm_slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], beyond[side], err);
+  }
+  if (st == LSM_OK && caps) {
+    /* (blend stays the classic baseline, without this rule)
+     * both directions see the original sets: A's components against B's
+     * inside, then B's against A's (lowering phi_b inside A's unmatched
+     * components leaves it positive there, so B's inside is unchanged) */
+    st = lsm_cap_unmatched(g->phi_a, g->phi_b, beyond[0], err);
+    if (st == LSM_OK) st = lsm_cap_unmatched(g->phi_b, g->phi_a, beyond[1], err);
+  }
+  if (st == LSM_OK && slopes)
+    st = lsm_zprofile_slopes(w, g->f.H, g->phi_a, g->phi_b, beyond, &g->slope_a, &g->slope_b, err);
+  lsm_grid_destroy(&beyond[0]);
+  lsm_grid_destroy(&beyond[1]);
+  if (st != LSM_OK) {
+    lsm_gap_free(g);
+    return st;
+  }
+  if (a->empty != b->empty) {
+    lsm_grid *full = a->empty ? g->phi_b : g->phi_a, *none = a->empty ? g->phi_a : g->phi_b;
+    const double depth = lsm_end_depth(full);
+    const double c = o->method == LSM_METHOD_BLEND ? depth : depth / log(2.0);
+    lsm_grid_fill(none, (float)c);
+  }
+  return LSM_OK;
+}

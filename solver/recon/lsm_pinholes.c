@@ -1,0 +1,158 @@
+/* lsm_pinholes: pinholes of the two-sided morph and the output slices (see the header). */
+#include "solver/recon/lsm_pinholes.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* Classes of a cell for mark_enclosed. */
+enum { CELL_INSIDE, CELL_OUTSIDE, CELL_OPEN, CELL_REACHED };
+
+/* The class of a sample of phi: inside (phi <= 0), outside, or outside and
+ * at least `thin` from the inside (open by itself). */
+static inline uint8_t cell_class(float phi, float thin) {
+  return phi <= 0.0f ? CELL_INSIDE : phi >= thin ? CELL_OPEN : CELL_OUTSIDE;
+}
+
+/* Breadth-first flood over 4-neighbours: from the cells queue[0 .. tail)
+ * (already set to `to`) into every cell of class `from` or `from_too`, each
+ * set to `to` and appended to queue.  Returns the new tail. */
+static size_t flood4(uint8_t *cls, int nx, int ny, int32_t *queue, size_t tail, uint8_t from,
+                     uint8_t from_too, uint8_t to) {
+  for (size_t head = 0; head < tail;) {
+    const int32_t k = queue[head++];
+    const int i = k % nx, j = k / nx;
+    const int ni[4] = {i - 1, i + 1, i, i}, nj[4] = {j, j, j - 1, j + 1};
+    for (int q = 0; q < 4; ++q) {
+      if (ni[q] < 0 || nj[q] < 0 || ni[q] >= nx || nj[q] >= ny) continue;
+      const int32_t m = nj[q] * nx + ni[q];
+      if (cls[m] != from && cls[m] != from_too) continue;
+      cls[m] = to;
+      queue[tail++] = m;
+    }
+  }
+  return tail;
+}
+
+/* The enclosed outside of an nx x ny image of cell classes: the 4-connected
+ * components of its outside that neither reach the border nor hold an open
+ * cell.  (4-connected: the dual of the 8-connected insides of
+ * lsm_grid_label_components, so an outside closed by a diagonal step of the
+ * inside is closed.)  On return cls[k] is 1 on those cells and 0 elsewhere;
+ * queue holds nx * ny cells.  Returns the number of cells marked. */
+static size_t mark_enclosed(uint8_t *cls, int nx, int ny, int32_t *queue) {
+  const size_t n = (size_t)nx * (size_t)ny;
+  size_t tail = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const int i = (int)(k % (size_t)nx), j = (int)(k / (size_t)nx);
+    const int border = i == 0 || j == 0 || i == nx - 1 || j == ny - 1;
+    if (cls[k] == CELL_OPEN || (cls[k] == CELL_OUTSIDE && border)) {
+      cls[k] = CELL_REACHED;
+      queue[tail++] = (int32_t)k;
+    }
+  }
+  flood4(cls, nx, ny, queue, tail, CELL_OUTSIDE, CELL_OPEN, CELL_REACHED);
+  size_t marked = 0;
+  for (size_t k = 0; k < n; ++k) {
+    cls[k] = cls[k] == CELL_OUTSIDE;
+    marked += cls[k];
+  }
+  return marked;
+}
+
+/* Marks (hole[k] = 1) the cells of phi's pinholes: the enclosed outside
+ * components of phi that lie everywhere less than `thin` from the inside.
+ * queue holds nx * ny cells.  Returns the number of cells marked. */
+static size_t mark_pinholes(const lsm_grid *phi, float thin, uint8_t *hole, int32_t *queue) {
+  const int nx = phi->nx, ny = phi->ny;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      hole[(size_t)j * (size_t)nx + (size_t)i] = cell_class(LSM_AT(phi, i, j), thin);
+  return mark_enclosed(hole, nx, ny, queue);
+}
+
+/* Whether a slice's region has a hole: an outside component that does not
+ * reach the image border.  cls and queue hold width x height cells. */
+int lsm_mask_has_hole(const lsm_mask *m, uint8_t *cls, int32_t *queue) {
+  const size_t n = (size_t)m->width * (size_t)m->height;
+  for (size_t k = 0; k < n; ++k) cls[k] = m->pixels[k] ? CELL_INSIDE : CELL_OUTSIDE;
+  return mark_enclosed(cls, m->width, m->height, queue) > 0;
+}
+
+/* Between two slices without holes (run_gap_regular), an output slice's
+ * hole of at most PINHOLE_FILL_CELLS pixels, each less than two pixels from
+ * the inside and inside one of the two slices, is filled: phi -> -phi there,
+ * kept within the two slices' range (item 6 of the README's method).  Such
+ * pinholes are not interpolated from the slices but made by the morph where
+ * two parts merge: the outside between them, a ridge of phi, does not sink
+ * below zero all at once, and a cell of it left above zero is a hole of one
+ * or two pixels (two balls merging, cut every 8th slice: 6 such holes; none
+ * with --method blend).  Larger thin holes are left: on the atlas
+ * structures most of their pixels are outside in the truth too, a notch
+ * whose mouth the morph closed (README, method item 5). */
+#define PINHOLE_FILL_CELLS 4
+lsm_status lsm_pinholes_fill(lsm_pinhole_fill *f, const lsm_stack_opts *o, int width, int height,
+                             float *out, lsm_err *err) {
+  const float thin = (float)(2.0 * fmax(o->pixel_dx, o->pixel_dy));
+  const int nx = width, ny = height;
+  const size_t n = (size_t)nx * (size_t)ny;
+  uint8_t *cls = f->cls;
+  int32_t *queue = f->queue;
+  for (size_t k = 0; k < n; ++k) cls[k] = cell_class(out[k], thin);
+  if (mark_enclosed(cls, nx, ny, queue) == 0) return LSM_OK;
+  for (size_t start = 0; start < n; ++start) {
+    if (cls[start] != 1) continue;
+    cls[start] = 2; /* one hole at a time: its cells 1 -> 2 */
+    queue[0] = (int32_t)start;
+    const size_t tail = flood4(cls, nx, ny, queue, 1, 1, 1, 2);
+    if (tail > PINHOLE_FILL_CELLS) continue;
+    if (!f->phi_a) {
+      const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
+      LSM_TRY(lsm_grid_create(nx, ny, hx, hy, &f->phi_a, err));
+      LSM_TRY(lsm_grid_create(nx, ny, hx, hy, &f->phi_b, err));
+      LSM_TRY(lsm_slice_phi(f->a, o->input, 0, 0, f->phi_a, err));
+      LSM_TRY(lsm_slice_phi(f->b, o->input, 0, 0, f->phi_b, err));
+    }
+    int inside_one = 1;
+    for (size_t q = 0; q < tail && inside_one; ++q) {
+      const int i = queue[q] % nx, j = queue[q] / nx;
+      inside_one = fminf(LSM_AT(f->phi_a, i, j), LSM_AT(f->phi_b, i, j)) < 0.0f;
+    }
+    for (size_t q = 0; q < tail && inside_one; ++q) {
+      const int i = queue[q] % nx, j = queue[q] / nx;
+      const float low = fminf(LSM_AT(f->phi_a, i, j), LSM_AT(f->phi_b, i, j));
+      out[queue[q]] = fmaxf(-out[queue[q]], low);
+    }
+  }
+  return LSM_OK;
+}
+
+/* The pinhole cells of a gap (run_gap_morph): *pinhole[k] = 1 where the cell
+ * is outside phi_a and in one of phi_a's pinholes, or inside phi_a and in one
+ * of phi_b's; *pinhole stays NULL when neither slice has one.  A pinhole is
+ * thinner than 2 cells, as thin_outside. */
+lsm_status lsm_pinholes_find(const lsm_grid *phi_a, const lsm_grid *phi_b, uint8_t **pinhole,
+                             lsm_err *err) {
+  const int nx = phi_a->nx, ny = phi_a->ny;
+  const size_t cells = (size_t)nx * (size_t)ny;
+  const float thin = 2.0f * fmaxf(phi_a->dx, phi_a->dy);
+  uint8_t *hole_a = lsm_alloc(cells, 1, err, "pinholes");
+  uint8_t *hole_b = hole_a ? lsm_alloc(cells, 1, err, "pinholes") : NULL;
+  int32_t *queue = hole_b ? lsm_alloc(cells, sizeof *queue, err, "pinholes") : NULL;
+  if (!queue) {
+    free(hole_a);
+    free(hole_b);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  const size_t marked = mark_pinholes(phi_a, thin, hole_a, queue) +
+                        mark_pinholes(phi_b, thin, hole_b, queue);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const size_t k = (size_t)j * (size_t)nx + (size_t)i;
+      hole_a[k] = LSM_AT(phi_a, i, j) > 0.0f ? hole_a[k] : hole_b[k];
+    }
+  free(hole_b);
+  free(queue);
+  if (marked) *pinhole = hole_a;
+  else free(hole_a);
+  return LSM_OK;
+}
