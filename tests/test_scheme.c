@@ -1330,7 +1330,7 @@ static double norm_diff_by_def(const lsm_grid *a, const lsm_grid *b) {
   return sqrt(s);
 }
 
-/* CP, the per-iteration stopping quantity (lsm_morph.h, README method item 9):
+/* CP, the per-iteration stopping quantity (lsm_morph.h, solver/README.md section 12):
  *   CP = | ||phi^n - phi_T|| - ||phi^(n-1) - phi_T|| |
  * over all cells of the working grid, phi in physical units, no area weight.
  * The norms are taken here from lsm_morph_phi after each step; a CP scaled or

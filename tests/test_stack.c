@@ -1210,8 +1210,8 @@ static void test_outline_vase(void **state) {
 /* ------------------------------------------------------------------------ */
 /* per-iteration mode                                                        */
 
-/* CP of pair p of a per-iteration run, by its definition (README method item
- * 9): | ||phi^n - phi_B|| - ||phi^(n-1) - phi_B|| | over all cells of the
+/* CP of pair p of a per-iteration run, by its definition (solver/README.md,
+ * section 12): | ||phi^n - phi_B|| - ||phi^(n-1) - phi_B|| | over all cells of the
  * working grid, the pair stopping at the first n with CP <= tol.  The working
  * grid is rebuilt here: the slices on a canvas with a 2-cell margin (the
  * frame's margin, the largest whole-pixel alignment shift + 2, with no shift

@@ -7,7 +7,7 @@
  *  circles   phi_0 = |x| - r1, phi_T = |x| - r2.  While phi stays a signed
  *            distance function the morph is phi(t) = phi_T + (phi_0 - phi_T) e^-t,
  *            so the front radius is exactly r(t) = r2 + (r1 - r2) e^-t
- *            (METHOD.md §2).  Error: |r_front - r(t)| over every zero crossing
+ *            (solver/README.md §2).  Error: |r_front - r(t)| over every zero crossing
  *            found by linear interpolation along the grid rows and columns;
  *            L1 = mean, Linf = max.  Cases "shrink" (20 -> 10) and "grow" (10 -> 20).
  *  squares   concentric axis-aligned squares, half-side 20 -> 10, exact

@@ -1,7 +1,7 @@
 """The two end rules side by side: an object ending next to an empty slice
 against the same object ending beside something that goes on.
 
-lsmorph ends a part of the object in two ways (README, method item 7):
+lsmorph ends a part of the object in two ways (solver/README.md §8):
   - alone: the whole section meets an empty slice, and the end rule of
     solver/recon/lsm_ends.c runs (the trend of the slices before, area caps, a
     section whole at mid-gap closing in a tip at the empty slice);

@@ -219,7 +219,7 @@ def main():
     L.append("## What is measured, and how")
     L.append("")
     L.append("lsmorph fills the gaps between sparse parallel binary slices by level-set "
-             "morphing, phi_t + (phi - phi_target)|grad phi| = 0 (METHOD.md). The studies:")
+             "morphing, phi_t + (phi - phi_target)|grad phi| = 0 (solver/README.md). The studies:")
     L.append("")
     L.append("1. **Grid convergence** of the solver itself (`lsm_morph` on analytic signed "
              "distance functions): concentric circles, whose front radius is known exactly, "

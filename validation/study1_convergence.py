@@ -66,7 +66,7 @@ def main():
     s.md()
     s.md("Driver: `validation/convergence.c` calls `lsm_morph` directly on analytic signed "
          "distance functions (no PNG), domain [-32, 32]^2 with N x N cells, dx = 64/N, "
-         "default CFL 0.75 (dt fixed from phi_0, METHOD.md §3.4). Concentric circles "
+         "default CFL 0.75 (dt fixed from phi_0, solver/README.md §4). Concentric circles "
          "r1 -> r2 have the exact front radius r(t) = r2 + (r1 - r2) e^-t. The error is "
          "|r_front - r(t)| over every zero crossing found by linear interpolation between "
          "neighbouring cells along rows and columns: L1 = mean, Linf = max. Cases: "

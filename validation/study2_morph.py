@@ -37,7 +37,7 @@ def main():
          "synthetic sets (gen_synthetic outlines; phi from `lsm_sdf_from_outline`, as the "
          "solver builds it; the sets are centred, so no alignment is involved). No "
          "reinitialisation (the solver's default). The last columns give the band error at "
-         "the step where the document's stopping rule CP <= 0.25 (METHOD.md §3.7) first "
+         "the step where the document's stopping rule CP <= 0.25 (solver/README.md §12) first "
          "holds." % (MAX_TARGET, MEAN_TARGET))
     s.md()
     table = []

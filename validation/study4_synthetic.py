@@ -15,21 +15,32 @@ import vlib
 from vlib import fnum, md_table, plt
 
 SETS = ["pyramid", "candlestick", "vase"]
-# The document's values (METHOD.md §5 table, LS column: slices / seconds per slice),
-# read from the method page at run time so that they are cited, not retyped.
+# The document's values (the LS and PLS columns, slices / seconds per slice, of the
+# table under DOC_HEADING in solver/README.md), read at run time so that they are
+# cited, not retyped.
 DOC_NAMES = {"pyramid": "Pyramid", "candlestick": "Candlestick", "vase": "Vase"}
+DOC_HEADING = "The design document's data sets and timings"
+DOC_DEFAULT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                           "solver", "README.md")
 
 
 def doc_table():
-    """Parses the LS and PLS columns of the table in METHOD.md §5."""
+    """Parses the LS and PLS columns of the document's table in solver/README.md
+    (the first table after the heading DOC_HEADING)."""
     import re
-    path = os.environ.get("LSMORPH_METHOD_MD", "/work/shared/docs/METHOD.md")
+    path = os.environ.get("LSMORPH_METHOD_MD", DOC_DEFAULT)
     out = {}
     if not os.path.exists(path):
         return out, path
     with open(path) as f:
+        section = False
         for line in f:
-            if not line.startswith("|"):
+            if line.startswith("#"):
+                if section and out:
+                    break
+                section = DOC_HEADING in line
+                continue
+            if not section or not line.startswith("|"):
                 continue
             cells = [c.strip() for c in line.strip().strip("|").split("|")]
             if len(cells) < 6:
@@ -105,6 +116,8 @@ def main():
     os.makedirs(synth, exist_ok=True)
     vlib.run([s.example("gen_synthetic"), "all", synth])
     doc, doc_path = doc_table()
+    if os.path.abspath(doc_path) == DOC_DEFAULT:
+        doc_path = "solver/README.md"
     cpu = vlib.cpu_model()
     solver_methods = [m for m in s.methods if m != "blend"]  # per-iteration needs a solver
 
@@ -160,7 +173,7 @@ def main():
          "(`pairs[].slices`, `pairs[].seconds`; the per-iteration mode runs each pair twice, "
          "once to count the iterations and once to emit them, and both are in the time). "
          "The document's columns are **the document's numbers** (LS and PLS columns of the "
-         "table in METHOD.md §5, read from `%s`), measured with MATLAB R2011b on an Intel "
+         "table in solver/README.md, read from `%s`), measured with MATLAB R2011b on an Intel "
          "Core i7 1.73 GHz laptop. Ours: %s, %s thread(s), on a machine shared with other "
          "jobs (load average in the header)." % (
              opts.get("tol", "?"), vlib.describe_options(opts), doc_path, cpu, opts.get("threads", "?")))

@@ -38,8 +38,9 @@ static const char reconstruct_help[] =
     "the object: each part of the last section beside it closes inside that gap the\n"
     "way the slices before it were narrowing, up to mid-gap; past it a small tip\n"
     "reaches the empty slice when that slice is the first or last one given (see\n"
-    "--ends; README, method item 7).  Nothing is extrapolated past the first and last\n"
-    "slices: keep one empty slice beyond each end for the object to close there.\n"
+    "--ends; solver/README.md, section 8).  Nothing is extrapolated past the first\n"
+    "and last slices: keep one empty slice beyond each end for the object to close\n"
+    "there.\n"
     "\n"
     "Input:\n"
     "  --input mask|outline   mask: filled regions (default); outline: thin closed\n"
@@ -156,7 +157,7 @@ static const char reconstruct_help_method[] =
     "                         rather than changed: little overlap in place (IoU < 1/2),\n"
     "                         more once shifted, the shift of largest overlap nearer the\n"
     "                         centroid shift than none, and the two alike at that shift\n"
-    "                         (README, method item 2); none: no alignment\n"
+    "                         (solver/README.md, section 9); none: no alignment\n"
     "\n";
 
 static const char reconstruct_help_running[] =
