@@ -1055,7 +1055,7 @@ static lsm_status reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi
      * step to the neighbouring slice */
     if (st == LSM_OK && cli->mesh)
       st = lsm_mesh_open(width, height, pixel_dx, pixel_dy, cli->stack.per_iteration ? 0.0 : dz,
-                         &sink.mesh, err);
+                         tmp, &sink.mesh, err);
     if (st == LSM_OK && cli->preview)
       st = lsm_preview_open(width, height, pixel_dx, pixel_dy, dz, &sink.preview, err);
     if (st == LSM_OK) {
