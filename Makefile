@@ -92,17 +92,17 @@ $(BUILD)/obj/%.o: %.c | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) -c $< -o $@
 
-# OpenCL kernels embedded in the binary: kernels/morph.cl with kernels/lsm_cell.h
-# and kernels/lsm_particle_cell.h spliced in at its #includes (the particle
-# header's own #include of lsm_cell.h dropped: it is already there), as a C
+# OpenCL kernels embedded in the binary: kernels/morph.cl with kernels/lsm_cell.h,
+# kernels/lsm_stencil.h and kernels/lsm_particle_cell.h spliced in at its #includes
+# (the headers' own #include of lsm_cell.h dropped: it is already there), as a C
 # byte array (a string literal would pass -Wpedantic's 4095-character limit),
 # NUL-terminated.
 KERNEL_GEN := $(BUILD)/gen/lsm_kernels.h
-$(KERNEL_GEN): kernels/morph.cl kernels/lsm_cell.h kernels/lsm_particle_cell.h
+$(KERNEL_GEN): kernels/morph.cl kernels/lsm_cell.h kernels/lsm_stencil.h kernels/lsm_particle_cell.h
 	@mkdir -p $(dir $@)
-	@{ echo '/* Generated from kernels/morph.cl + kernels/lsm_cell.h + kernels/lsm_particle_cell.h by the Makefile: do not edit. */'; \
+	@{ echo '/* Generated from kernels/morph.cl + kernels/lsm_*.h by the Makefile: do not edit. */'; \
 	  echo 'static const unsigned char lsm_kernel_source[] = {'; \
-	  awk '/^#include "lsm_(particle_)?cell.h"/ { f = $$2; gsub(/"/, "", f); n = 0; \
+	  awk '/^#include "lsm_(particle_cell|cell|stencil).h"/ { f = $$2; gsub(/"/, "", f); n = 0; \
 	         while ((getline l < ("kernels/" f)) > 0) { n++; \
 	           if (l ~ /^#include "kernels\/lsm_cell.h"/) l = ""; \
 	           if (n == 1) print "#line 1 \"" f "\""; print l } \

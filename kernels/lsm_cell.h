@@ -22,12 +22,19 @@
 #define LSM_SQRT(x) sqrt(x)
 #define LSM_FABS(x) fabs(x)
 #define LSM_PRIV __private
+#define LSM_GLOBAL __global
+#define LSM_IDX int
+#define LSM_UNROLL _Pragma("unroll")
 #else
 #include <math.h>
+#include <stddef.h>
 #define LSM_FN static inline
 #define LSM_SQRT(x) sqrtf(x)
 #define LSM_FABS(x) fabsf(x)
 #define LSM_PRIV
+#define LSM_GLOBAL
+#define LSM_IDX ptrdiff_t /* grid offsets (OpenCL: int, the host keeps grids below 2^31 floats) */
+#define LSM_UNROLL
 #endif
 
 /* Branch-free max/min that compilers vectorise (no NaN semantics needed:

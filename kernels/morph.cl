@@ -35,6 +35,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 
 #include "lsm_cell.h"
+#include "lsm_stencil.h"
 #include "lsm_particle_cell.h"
 
 #ifndef LSM_GHOST
@@ -87,56 +88,8 @@ __kernel void lsm_fill_ghosts(__global float *g, int nx, int ny, int stride) {
 }
 
 /* ---- one Shu–Osher stage: out = c0 u0 + c1 (in - dt Hhat(in)) ----------------------
- * out may be u0 (the last stage of RK2/RK3), never in; in's ghosts are filled. */
-inline float lsm_cl_upwind(__global const float *u0, __global const float *in,
-                           __global const float *target, int k, int stride, float inv_dx,
-                           float inv_dy, float c0, float c1, float dt) {
-  const float c = in[k];
-  const float H = lsm_upwind_hamiltonian(c - target[k], (c - in[k - 1]) * inv_dx,
-                                         (in[k + 1] - c) * inv_dx, (c - in[k - stride]) * inv_dy,
-                                         (in[k + stride] - c) * inv_dy);
-  return c0 * u0[k] + c1 * (c - dt * H);
-}
-
-/* The 9-cell row and column through the cell, loaded once; the one-sided
- * differences are formed from them exactly as stage_roefix does. */
-inline float lsm_cl_roefix(__global const float *u0, __global const float *in,
-                           __global const float *target, int k, int stride, float inv_dx,
-                           float inv_dy, float c0, float c1, float dt) {
-  float row[9], col[9];
-#pragma unroll
-  for (int d = 0; d < 9; ++d) {
-    row[d] = in[k + (d - 4)];
-    col[d] = in[k + (d - 4) * stride];
-  }
-  float xm[7], xp[7], ym[7], yp[7];
-#pragma unroll
-  for (int q = 0; q < 7; ++q) {
-    xm[q] = (row[q + 1] - row[q]) * inv_dx;
-    xp[q] = (row[q + 2] - row[q + 1]) * inv_dx;
-    ym[q] = (col[q + 1] - col[q]) * inv_dy;
-    yp[q] = (col[q + 2] - col[q + 1]) * inv_dy;
-  }
-  const float c = row[4];
-  const float H = lsm_roefix_hamiltonian(c - target[k], xm, xp, ym, yp);
-  return c0 * u0[k] + c1 * (c - dt * H);
-}
-
-/* The 7-cell row and column through the cell, as stage_weno5 loads them. */
-inline float lsm_cl_weno5(__global const float *u0, __global const float *in,
-                          __global const float *target, int k, int stride, float inv_dx,
-                          float inv_dy, float c0, float c1, float dt) {
-  float row[7], col[7];
-#pragma unroll
-  for (int d = 0; d < 7; ++d) {
-    row[d] = in[k + (d - 3)];
-    col[d] = in[k + (d - 3) * stride];
-  }
-  const float c = row[3];
-  const float H = lsm_weno5_hamiltonian(c - target[k], row, col, inv_dx, inv_dy);
-  return c0 * u0[k] + c1 * (c - dt * H);
-}
-
+ * out may be u0 (the last stage of RK2/RK3), never in; in's ghosts are filled.
+ * The cell's value: kernels/lsm_stencil.h, as on the C path. */
 #define LSM_CL_STAGE_KERNEL(name, cell)                                                    \
   __kernel void name(__global float *out, __global const float *u0,                        \
                      __global const float *in, __global const float *target, int nx, int ny, \
@@ -149,29 +102,20 @@ inline float lsm_cl_weno5(__global const float *u0, __global const float *in,
       out[k] = cell(u0, in, target, k, stride, inv_dx, inv_dy, c0, c1, dt);                \
   }
 
-LSM_CL_STAGE_KERNEL(lsm_stage_upwind, lsm_cl_upwind)
-LSM_CL_STAGE_KERNEL(lsm_stage_roefix, lsm_cl_roefix)
-LSM_CL_STAGE_KERNEL(lsm_stage_weno5, lsm_cl_weno5)
+LSM_CL_STAGE_KERNEL(lsm_stage_upwind, lsm_stage_upwind_at)
+LSM_CL_STAGE_KERNEL(lsm_stage_roefix, lsm_stage_roefix_at)
+LSM_CL_STAGE_KERNEL(lsm_stage_weno5, lsm_stage_weno5_at)
 
 /* ---- reinitialisation: one pseudo-time step, next <- phi (phi, phi0 ghosts filled) ---- */
-inline float lsm_cl_reinit(__global const float *phi, __global const float *phi0, int k,
-                           int stride, float inv_dx, float inv_dy, float h, float dtau) {
-  const float c = phi[k];
-  return lsm_reinit_cell(c, phi0[k], phi0[k - 1], phi0[k + 1], phi0[k - stride],
-                         phi0[k + stride], (c - phi[k - 1]) * inv_dx, (phi[k + 1] - c) * inv_dx,
-                         (c - phi[k - stride]) * inv_dy, (phi[k + stride] - c) * inv_dy, inv_dx,
-                         inv_dy, h, dtau);
-}
-
 __kernel void lsm_reinit_step(__global float *next, __global const float *phi,
                               __global const float *phi0, int nx, int ny, int stride,
                               float inv_dx, float inv_dy, float h, float dtau) {
   const int i = (int)get_global_id(0), j = (int)get_global_id(1);
   const int k = lsm_cl_at(i, j, stride);
   if (lsm_cl_group_inside(nx, ny))
-    next[k] = lsm_cl_reinit(phi, phi0, k, stride, inv_dx, inv_dy, h, dtau);
+    next[k] = lsm_reinit_at(phi, phi0, k, stride, inv_dx, inv_dy, h, dtau);
   else if (i < nx && j < ny)
-    next[k] = lsm_cl_reinit(phi, phi0, k, stride, inv_dx, inv_dy, h, dtau);
+    next[k] = lsm_reinit_at(phi, phi0, k, stride, inv_dx, inv_dy, h, dtau);
 }
 
 /* ---- reductions --------------------------------------------------------------------
@@ -227,14 +171,8 @@ __kernel void lsm_cfl_partial(__global const float *phi, __global const float *t
   float rate = 0.0f;
   for (int j = (int)get_global_id(1); j < ny; j += (int)get_global_size(1)) {
     const int b = lsm_cl_at(0, j, stride);
-    for (int i = i0; i < i1; ++i) {
-      const int k = b + i;
-      const float c = phi[k];
-      const float r = lsm_cfl_rate_of(roefix, c - target[k], (c - phi[k - 1]) * inv_dx,
-                                      (phi[k + 1] - c) * inv_dx, (c - phi[k - stride]) * inv_dy,
-                                      (phi[k + stride] - c) * inv_dy, inv_dx, inv_dy);
-      rate = lsm_maxf(rate, r);
-    }
+    for (int i = i0; i < i1; ++i)
+      rate = lsm_maxf(rate, lsm_cfl_rate_at(phi, target, b + i, stride, inv_dx, inv_dy, roefix));
   }
   scratch[lid] = rate;
   LSM_CL_COMBINE(scratch, lid, n, max,

@@ -707,3 +707,36 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   }
   return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown command '%s' (see 'lsmorph --help')", cmd);
 }
+
+void lsm_cli_note_unused(const lsm_cli *cli, FILE *f) {
+  if (cli->stack.per_iteration && cli->stack.dz > 0)
+    fprintf(f, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
+               "iteration is a slice)\n");
+  if (cli->stack.per_iteration &&
+      ((cli->interp_given && cli->stack.interp != LSM_INTERP_LINEAR) ||
+       (cli->ends_given && cli->stack.ends != LSM_ENDS_HALFWAY)))
+    fprintf(f, "lsmorph: note: --per-iteration takes the linear profile and ends an "
+               "object at mid-gap: --interp cubic and --ends tip|auto have no effect\n");
+  else if (cli->stack.interp == LSM_INTERP_LINEAR && cli->ends_given &&
+           cli->stack.ends != LSM_ENDS_HALFWAY)
+    fprintf(f, "lsmorph: note: --interp linear ends an object at mid-gap: --ends "
+               "tip|auto have no effect (they shape the cubic profile's ends)\n");
+  if (cli->stack.method == LSM_METHOD_BLEND && cli->solver_option)
+    fprintf(f, "lsmorph: note: %s has no effect with --method blend, which solves no "
+               "PDE (no solver option does: --scheme, --time, --cfl, --max-iter, "
+               "--reinit-every, --reinit-iters)\n", cli->solver_option);
+  if (cli->stack.method != LSM_METHOD_PLS && cli->pls_option)
+    fprintf(f, "lsmorph: note: %s has no effect without --method pls (it sets up the "
+               "particles)\n", cli->pls_option);
+  if (!cli->stack.per_iteration && cli->tol_given)
+    fprintf(f, "lsmorph: note: --tol has no effect without --per-iteration (it stops "
+               "each pair of that mode)\n");
+  if (cli->backend == LSM_BACKEND_C && cli->device_given)
+    fprintf(f, "lsmorph: note: --device has no effect with --backend c\n");
+  if (cli->nrrd_encoding_given && !(cli->formats & LSM_FORMAT_NRRD))
+    fprintf(f, "lsmorph: note: --nrrd-encoding has no effect without nrrd in --format\n");
+  if (cli->stack.method != LSM_METHOD_BLEND && cli->stack.morph.cfl > 1.0)
+    fprintf(f, "lsmorph: note: --cfl %g is above 1, where the schemes are no longer "
+               "monotone: thin parts may oscillate or blow up (a blow-up stops the run "
+               "with an error)\n", cli->stack.morph.cfl);
+}

@@ -4,6 +4,7 @@
 #define LSM_CLI_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 #include "solver/recon/lsm_stack.h"
 #include "solver/base/lsm_status.h"
@@ -62,7 +63,10 @@ typedef struct lsm_cli {
 lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err);
 
 /* Prints the help text for a topic (NULL: general) to f. */
-#include <stdio.h>
 void lsm_cli_help(FILE *f, const char *topic);
+
+/* Notes (one line each) on options given that have no effect in this run, or
+ * may not do what was meant (--cfl above 1). */
+void lsm_cli_note_unused(const lsm_cli *cli, FILE *f);
 
 #endif

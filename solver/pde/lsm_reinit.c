@@ -2,7 +2,7 @@
 
 #include <stdlib.h>
 
-#include "kernels/lsm_cell.h"
+#include "kernels/lsm_stencil.h"
 
 struct lsm_reinit {
   lsm_grid *phi0; /* the field at the start: fixes signs and the interface */
@@ -43,16 +43,14 @@ void lsm_reinit_run(lsm_reinit *r, lsm_grid *phi, int iterations, int threads) {
   for (int it = 0; it < iterations; ++it) {
     lsm_grid_fill_ghosts(phi);
     lsm_grid *nx = r->next;
+    const ptrdiff_t s = phi->stride;
+    const float *p = phi->data, *a = p0->data;
+    float *o = nx->data;
 #pragma omp parallel for num_threads(lsm_grid_threads(phi, threads)) schedule(static)
     for (int j = 0; j < phi->ny; ++j) {
-      const float *c = &LSM_AT(phi, 0, j), *dn = &LSM_AT(phi, 0, j - 1), *up = &LSM_AT(phi, 0, j + 1);
-      const float *a = &LSM_AT(p0, 0, j), *adn = &LSM_AT(p0, 0, j - 1), *aup = &LSM_AT(p0, 0, j + 1);
-      float *o = &LSM_AT(nx, 0, j);
+      const ptrdiff_t row = (ptrdiff_t)j * s;
       for (int i = 0; i < phi->nx; ++i)
-        o[i] = lsm_reinit_cell(c[i], a[i], a[i - 1], a[i + 1], adn[i], aup[i],
-                               (c[i] - c[i - 1]) * inv_dx, (c[i + 1] - c[i]) * inv_dx,
-                               (c[i] - dn[i]) * inv_dy, (up[i] - c[i]) * inv_dy, inv_dx, inv_dy,
-                               h, dtau);
+        o[row + i] = lsm_reinit_at(p, a, row + i, s, inv_dx, inv_dy, h, dtau);
     }
     lsm_grid_copy(phi, nx);
   }

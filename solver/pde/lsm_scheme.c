@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "kernels/lsm_cell.h"
+#include "kernels/lsm_stencil.h"
 
 LSM_NAME_FUNCTIONS(lsm_scheme, LSM_SCHEME_LIST, lsm_scheme_name, lsm_scheme_from_name)
 LSM_NAME_FUNCTIONS(lsm_time, LSM_TIME_LIST, lsm_time_name, lsm_time_from_name)
@@ -20,18 +20,15 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, do
   lsm_grid_fill_ghosts(phi);
   const int roefix = scheme == LSM_SCHEME_ROEFIX;
   const float inv_dx = 1.0f / phi->dx, inv_dy = 1.0f / phi->dy;
+  const ptrdiff_t s = phi->stride;
+  const float *p = phi->data, *t = phi_target->data;
   float rate = 0.0f;
 #pragma omp parallel for num_threads(lsm_grid_threads(phi, threads)) schedule(static) reduction(max : rate)
   for (int j = 0; j < phi->ny; ++j) {
-    const float *c = &LSM_AT(phi, 0, j), *dn = &LSM_AT(phi, 0, j - 1), *up = &LSM_AT(phi, 0, j + 1);
-    const float *t = &LSM_AT(phi_target, 0, j);
+    const ptrdiff_t row = (ptrdiff_t)j * s;
     float row_rate = 0.0f;
-    for (int i = 0; i < phi->nx; ++i) {
-      float r = lsm_cfl_rate_of(roefix, c[i] - t[i], (c[i] - c[i - 1]) * inv_dx,
-                                (c[i + 1] - c[i]) * inv_dx, (c[i] - dn[i]) * inv_dy,
-                                (up[i] - c[i]) * inv_dy, inv_dx, inv_dy);
-      row_rate = lsm_maxf(row_rate, r);
-    }
+    for (int i = 0; i < phi->nx; ++i)
+      row_rate = lsm_maxf(row_rate, lsm_cfl_rate_at(p, t, row + i, s, inv_dx, inv_dy, roefix));
     rate = lsm_maxf(rate, row_rate);
   }
   *dt = rate > 0.0f ? cfl / (double)rate : INFINITY;
@@ -39,82 +36,37 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, do
 
 /* ---- one stage -------------------------------------------------------------------- */
 
-/* The upwind sweep is the hot loop: compiled for AVX-512F and AVX2 as well as
- * the baseline and picked at load time (GCC function multi-versioning).  Every
- * clone gives the same bits: C17 mode contracts no a*b+c into FMA, and the
- * vector square root, like the scalar one, is correctly rounded.  (The CFL
- * sweep gained nothing from the clones: 3.9 % of a 512^2 run either way.) */
+/* The upwind and WENO5 sweeps are the hot loops: compiled for AVX-512F and
+ * AVX2 as well as the baseline and picked at load time (GCC function
+ * multi-versioning).  Every clone gives the same bits: C17 mode contracts no
+ * a*b+c into FMA, and the vector square root, like the scalar one, is
+ * correctly rounded. */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define LSM_HOT_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
 #define LSM_HOT_CLONES
 #endif
 
-LSM_HOT_CLONES
-static void stage_upwind(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
-                         const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {
-  const float inv_dx = 1.0f / in->dx, inv_dy = 1.0f / in->dy;
-#pragma omp parallel for num_threads(lsm_grid_threads(in, threads)) schedule(static)
-  for (int j = 0; j < in->ny; ++j) {
-    const float *c = &LSM_AT(in, 0, j), *dn = &LSM_AT(in, 0, j - 1), *up = &LSM_AT(in, 0, j + 1);
-    const float *t = &LSM_AT(phi_target, 0, j), *u = &LSM_AT(u0, 0, j);
-    float *o = &LSM_AT(out, 0, j);
-    for (int i = 0; i < in->nx; ++i) {
-      float H = lsm_upwind_hamiltonian(c[i] - t[i], (c[i] - c[i - 1]) * inv_dx,
-                                       (c[i + 1] - c[i]) * inv_dx, (c[i] - dn[i]) * inv_dy,
-                                       (up[i] - c[i]) * inv_dy);
-      o[i] = c0 * u[i] + c1 * (c[i] - dt * H);
-    }
+/* A sweep of one stage over the interior, the cell's value from `cell`
+ * (kernels/lsm_stencil.h); rows in parallel. */
+#define LSM_STAGE_SWEEP(name, cell)                                                          \
+  static void name(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,                   \
+                   const lsm_grid *phi_target, float c0, float c1, float dt, int threads) { \
+    const float inv_dx = 1.0f / in->dx, inv_dy = 1.0f / in->dy;                              \
+    const ptrdiff_t s = in->stride;                                                          \
+    const float *u = u0->data, *p = in->data, *t = phi_target->data;                         \
+    float *o = out->data;                                                                    \
+    _Pragma("omp parallel for num_threads(lsm_grid_threads(in, threads)) schedule(static)") \
+    for (int j = 0; j < in->ny; ++j) {                                                       \
+      const ptrdiff_t row = (ptrdiff_t)j * s;                                                \
+      for (int i = 0; i < in->nx; ++i)                                                       \
+        o[row + i] = cell(u, p, t, row + i, s, inv_dx, inv_dy, c0, c1, dt);                  \
+    }                                                                                        \
   }
-}
 
-static void stage_roefix(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
-                         const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {
-  const float inv_dx = 1.0f / in->dx, inv_dy = 1.0f / in->dy;
-  const ptrdiff_t s = in->stride;
-#pragma omp parallel for num_threads(lsm_grid_threads(in, threads)) schedule(static)
-  for (int j = 0; j < in->ny; ++j) {
-    const float *c = &LSM_AT(in, 0, j), *t = &LSM_AT(phi_target, 0, j), *u = &LSM_AT(u0, 0, j);
-    float *o = &LSM_AT(out, 0, j);
-    float xm[7], xp[7], ym[7], yp[7];
-    for (int i = 0; i < in->nx; ++i) {
-      const float *p = c + i;
-      for (int k = 0; k < 7; ++k) {
-        const int d = k - 3;
-        xm[k] = (p[d] - p[d - 1]) * inv_dx;
-        xp[k] = (p[d + 1] - p[d]) * inv_dx;
-        ym[k] = (p[d * s] - p[(d - 1) * s]) * inv_dy;
-        yp[k] = (p[(d + 1) * s] - p[d * s]) * inv_dy;
-      }
-      float H = lsm_roefix_hamiltonian(p[0] - t[i], xm, xp, ym, yp);
-      o[i] = c0 * u[i] + c1 * (p[0] - dt * H);
-    }
-  }
-}
-
-/* The row and the column of seven values through each cell, as the OpenCL
- * kernel loads them. */
-LSM_HOT_CLONES
-static void stage_weno5(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
-                        const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {
-  const float inv_dx = 1.0f / in->dx, inv_dy = 1.0f / in->dy;
-  const ptrdiff_t s = in->stride;
-#pragma omp parallel for num_threads(lsm_grid_threads(in, threads)) schedule(static)
-  for (int j = 0; j < in->ny; ++j) {
-    const float *c = &LSM_AT(in, 0, j), *t = &LSM_AT(phi_target, 0, j), *u = &LSM_AT(u0, 0, j);
-    float *o = &LSM_AT(out, 0, j);
-    float row[7], col[7];
-    for (int i = 0; i < in->nx; ++i) {
-      const float *p = c + i;
-      for (int k = 0; k < 7; ++k) {
-        row[k] = p[k - 3];
-        col[k] = p[(k - 3) * s];
-      }
-      const float H = lsm_weno5_hamiltonian(p[0] - t[i], row, col, inv_dx, inv_dy);
-      o[i] = c0 * u[i] + c1 * (p[0] - dt * H);
-    }
-  }
-}
+LSM_HOT_CLONES LSM_STAGE_SWEEP(stage_upwind, lsm_stage_upwind_at)
+LSM_STAGE_SWEEP(stage_roefix, lsm_stage_roefix_at)
+LSM_HOT_CLONES LSM_STAGE_SWEEP(stage_weno5, lsm_stage_weno5_at)
 
 void lsm_scheme_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
                       const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {

@@ -1,0 +1,21 @@
+/* lsm_progress_bar: a run's progress on stderr: a bar redrawn in place on a
+ * terminal, else a line every 10 %. */
+#ifndef LSM_PROGRESS_BAR_H
+#define LSM_PROGRESS_BAR_H
+
+#include "solver/recon/lsm_stack.h"
+
+typedef struct lsm_progress_bar {
+  int tty;          /* stderr is a terminal */
+  int last_percent; /* the last percentage shown (-1: none yet) */
+  double start;     /* lsm_wall_seconds() when the run began */
+} lsm_progress_bar;
+
+/* Seconds on a monotonic clock (differences only). */
+double lsm_wall_seconds(void);
+
+/* The progress callback of a run that began at start (lsm_wall_seconds);
+ * *bar holds its state and must outlive the run. */
+lsm_progress lsm_progress_bar_start(lsm_progress_bar *bar, double start);
+
+#endif
