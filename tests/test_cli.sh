@@ -700,4 +700,24 @@ check "full 0/1 slice: a note says non-zero pixels are foreground" grep -q "non-
 check "full 0/1 slice: same volume as the 0/255 stack" cmp -s "$TMP/out-labfull01/volume.nrrd" "$TMP/out-labfull255/volume.nrrd"
 check "full 0/255 slice: its output slice is full" sh -c "! cmp -s '$TMP/out-labfull255/slices/00002.png' '$TMP/out-labfull255/slices/00001.png'"
 
+
+# ---- reconstruction rules: help rules, --rules-off, run.json's options.rules_off ----------
+out=$("$LSM" help rules 2>&1)
+check "help rules exits 0" [ $? -eq 0 ]
+case $out in *"
+moving-parts
+  what: "*"
+end-floor
+  what: "*) ok ;; *) bad "help rules does not list moving-parts and end-floor" ;; esac
+check "default run.json: options.rules_off is []" grep -q '"rules_off": \[\]' "$OUT/run.json"
+"$LSM" reconstruct "$SET" -o "$TMP/out-rules" --input outline --heights "$SET/heights.txt" \
+  --dz 10 -q --no-preview --rules-off end-floor,pinhole-fill 2>"$TMP/e"
+check "--rules-off: exit 0 ($(cat "$TMP/e"))" [ $? -eq 0 ]
+check "--rules-off: run.json lists them in table order" \
+  grep -q '"rules_off": \["pinhole-fill", "end-floor"\]' "$TMP/out-rules/run.json"
+"$LSM" reconstruct "$SET" -o "$TMP/x" --rules-off end-floor,no-such-rule >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "--rules-off with an unknown name exits 2 (got $rc)" [ $rc -eq 2 ]
+check "--rules-off names the unknown rule" grep -q "'no-such-rule' is not a rule" "$TMP/e"
+
 finish

@@ -46,7 +46,8 @@ static lsm_grid *end_at_m(const lsm_grid *full, const lsm_grid *beyond, double h
   lsm_end *end = NULL;
   lsm_grid *work = NULL;
   assert_int_equal(
-      lsm_end_create(full, beyond, h_beyond, farther, h_farther, H, profile, &end, &err), LSM_OK);
+      lsm_end_create(full, beyond, h_beyond, farther, h_farther, H, profile, NULL, &end, &err),
+      LSM_OK);
   assert_int_equal(lsm_grid_clone(full, &work, &err), LSM_OK);
   lsm_end_at(end, sigma, work);
   lsm_end_destroy(&end);

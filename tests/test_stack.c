@@ -1136,6 +1136,85 @@ static void test_parts_apart(void **state) {
   }
 }
 
+/* Rules switched off (lsm_rules.h) fall back to what the table says: moving
+ * parts morph in place, the morph's pinholes stay, the canvas margin is
+ * background, a moved pair is not aligned.  And with every rule off at once
+ * a stack with ends, parts and a merge still runs. */
+static void switch_off(lsm_stack_opts *o, const char *names) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_rules_switch_off(&o->rules, names, &err), LSM_OK);
+}
+
+static void test_rules_off(void **state) {
+  (void)state;
+  const double z2[2] = {0, 8};
+  lsm_stack_opts o;
+  run r;
+  /* moving-parts: two discs moving apart */
+  const slice_def apart[2] = {{2, {disc(40, C, 5), disc(60, C, 5)}},
+                              {2, {disc(20, C, 5), disc(80, C, 5)}}};
+  default_opts(&o);
+  assert_int_equal(run_stack(&r, W, H, 0, apart, z2, 2, &o), LSM_OK);
+  assert_int_equal(r.stats[0].moving_parts, 2);
+  sink_free(&r.sink);
+  switch_off(&o, "moving-parts");
+  assert_int_equal(run_stack(&r, W, H, 0, apart, z2, 2, &o), LSM_OK);
+  assert_int_equal(r.stats[0].moving_parts, 0);
+  sink_free(&r.sink);
+  /* align-auto: a disc that moved by more than its width */
+  const slice_def moved[2] = {{1, {disc(30, C, 10)}}, {1, {disc(70, C, 10)}}};
+  default_opts(&o);
+  assert_int_equal(run_stack(&r, W, H, 0, moved, z2, 2, &o), LSM_OK);
+  assert_int_equal(r.stats[0].aligned, 1);
+  sink_free(&r.sink);
+  switch_off(&o, "align-auto");
+  assert_int_equal(run_stack(&r, W, H, 0, moved, z2, 2, &o), LSM_OK);
+  assert_int_equal(r.stats[0].aligned, 0);
+  sink_free(&r.sink);
+  /* border-extension: a band across the image lags at its border columns */
+  const slice_def band[2] = {{1, {rect(0, 45, W - 1, 55, 0)}}, {1, {rect(0, 40, W - 1, 60, 0)}}};
+  default_opts(&o);
+  switch_off(&o, "border-extension");
+  assert_int_equal(run_stack(&r, W, H, 0, band, z2, 2, &o), LSM_OK);
+  int lagging = 0;
+  for (int y = 0; y < H; ++y) {
+    const float *phi = r.sink.s[4].phi;
+    lagging += (phi[y * W] <= 0.0f) != (phi[y * W + W / 2] <= 0.0f);
+  }
+  assert_true(lagging > 0);
+  sink_free(&r.sink);
+  /* pinhole-fill: two balls merging (test_merge_no_pinholes) keep holes */
+  enum { N = 8, SIDE = 128 };
+  slice_def balls[N];
+  double z[N];
+  for (int k = 0; k < N; ++k) {
+    z[k] = 8.0 * k;
+    balls[k].n = 0;
+    const double r1 = 400.0 - (z[k] - 26.0) * (z[k] - 26.0);
+    const double r2 = 400.0 - (z[k] - 40.0) * (z[k] - 40.0);
+    if (r1 > 0.0) balls[k].s[balls[k].n++] = disc(46.0, 63.5, sqrt(r1));
+    if (r2 > 0.0) balls[k].s[balls[k].n++] = disc(82.0, 63.5, sqrt(r2));
+  }
+  default_opts(&o);
+  switch_off(&o, "pinhole-fill");
+  assert_int_equal(run_stack(&r, SIDE, SIDE, 0, balls, z, N, &o), LSM_OK);
+  int total = 0;
+  for (size_t k = 0; k < r.sink.n; ++k) total += holes(r.sink.s[k].phi, SIDE, SIDE);
+  print_message("rules off: pinhole-fill off leaves %d holes\n", total);
+  assert_true(total > 0);
+  sink_free(&r.sink);
+  /* every rule off, for each method */
+  for (int m = 0; m < 3; ++m) {
+    default_opts(&o);
+    o.method = m == 0 ? LSM_METHOD_LS : m == 1 ? LSM_METHOD_PLS : LSM_METHOD_BLEND;
+    o.rules.off = ~(uint64_t)0;
+    assert_int_equal(run_stack(&r, SIDE, SIDE, 0, balls, z, N, &o), LSM_OK);
+    assert_int_equal(r.sink.n, 57);
+    sink_free(&r.sink);
+  }
+}
+
 /* ------------------------------------------------------------------------ */
 /* outline input, nested contours                                            */
 
@@ -1408,6 +1487,7 @@ int main(void) {
       cmocka_unit_test(test_align_auto_inside),
       cmocka_unit_test(test_align_auto_apart_unlike),
       cmocka_unit_test(test_parts_apart),
+      cmocka_unit_test(test_rules_off),
       cmocka_unit_test(test_outline_ring),
       cmocka_unit_test(test_outline_vase),
       cmocka_unit_test(test_per_iteration),

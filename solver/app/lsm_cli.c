@@ -16,7 +16,7 @@ static const char general_help[] =
     "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
     "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
     "  lsmorph devices\n"
-    "  lsmorph --help [COMMAND] | --version | help reconstruct|score|devices\n"
+    "  lsmorph --help [COMMAND] | --version | help reconstruct|score|devices|rules\n"
     "\n"
     "Commands:\n"
     "  reconstruct   read PNG or TIFF slices, morph between consecutive slices, write a volume\n"
@@ -158,6 +158,7 @@ static const char reconstruct_help_method[] =
     "                         more once shifted, the shift of largest overlap nearer the\n"
     "                         centroid shift than none, and the two alike at that shift\n"
     "                         (solver/README.md, section 9); none: no alignment\n"
+    "  --rules-off NAME,...   switch rules off, for experiments ('lsmorph help rules')\n"
     "\n";
 
 static const char reconstruct_help_running[] =
@@ -293,6 +294,8 @@ void lsm_cli_help(FILE *f, const char *topic) {
     fputs(score_help, f);
   else if (topic && strcmp(topic, "devices") == 0)
     fputs(devices_help, f);
+  else if (topic && strcmp(topic, "rules") == 0)
+    lsm_rules_print(f);
   else
     fputs(general_help, f);
 }
@@ -580,6 +583,9 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       NEEDS_VALUE();
       if ((so->align = lsm_align_from_name(v)) == LSM_ALIGN_UNKNOWN)
         return lsm_fail(err, LSM_ERR_USAGE, NULL, "--align: '%s' is not one of auto, hull, none", v);
+    } else if (IS("--rules-off")) {
+      NEEDS_VALUE();
+      LSM_TRY(lsm_rules_switch_off(&so->rules, v, err));
     } else if (IS("--threads")) {
       NEEDS_VALUE();
       LSM_TRY(parse_int(name, v, 1, 4096, &n, err));
@@ -673,10 +679,11 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
     cli->command = LSM_CMD_HELP;
     cli->help_topic = argc > 2 ? argv[2] : NULL;
     if (cli->help_topic && strcmp(cli->help_topic, "reconstruct") != 0 &&
-        strcmp(cli->help_topic, "score") != 0 && strcmp(cli->help_topic, "devices") != 0)
+        strcmp(cli->help_topic, "score") != 0 && strcmp(cli->help_topic, "devices") != 0 &&
+        strcmp(cli->help_topic, "rules") != 0)
       return lsm_fail(err, LSM_ERR_USAGE, NULL,
-                      "%s: no command '%s' (help reconstruct, help score, help devices)", cmd,
-                      cli->help_topic);
+                      "%s: no command '%s' (help reconstruct, help score, help devices, help rules)",
+                      cmd, cli->help_topic);
     if (argc > 3)
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes one command at most, not '%s'", cmd,
                       argv[3]);

@@ -39,6 +39,13 @@ static void write_options(FILE *f, const lsm_run_record *run) {
   lsm_json_string(f, lsm_interp_name(o->interp));
   fputs(", \"ends\": ", f);
   lsm_json_string(f, lsm_end_rule_name(o->ends));
+  fputs(", \"rules_off\": [", f);
+  for (int r = 0, n = 0; r < LSM_RULE_COUNT; ++r)
+    if (!lsm_rule_on(&o->rules, (lsm_rule)r)) {
+      if (n++) fputs(", ", f);
+      lsm_json_string(f, lsm_rule_name((lsm_rule)r));
+    }
+  fputs("]", f);
   fputs(", \"cfl\": ", f);
   lsm_json_number(f, o->morph.cfl);
   fprintf(f, ", \"reinit_every\": %d, \"reinit_iters\": %d, \"tol\": ", o->morph.reinit_every,

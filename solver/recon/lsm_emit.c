@@ -13,10 +13,9 @@ double lsm_run_seconds(void) {
 }
 
 /* A sample of exactly 0 lies on the surface and counts as inside (phi <= 0,
- * as the masks draw it).  Interpolating half-pixel distances makes such ties
- * (whole rows of them where an edge moves one pixel in two steps), so they
- * leave a millionth of a pixel below zero: a reader that takes phi < 0 as
- * inside then draws the same shape as slices/. */
+ * as the masks draw it); interpolating half-pixel distances makes whole rows
+ * of such ties.  They leave a millionth of a pixel below zero (rule
+ * zero-ties), so a reader taking phi < 0 as inside draws the same shape. */
 static void break_zero_ties(float *phi, size_t cells, double pixel) {
   const float below = (float)(-1e-6 * pixel);
   for (size_t k = 0; k < cells; ++k)
@@ -25,8 +24,9 @@ static void break_zero_ties(float *phi, size_t cells, double pixel) {
 
 lsm_status lsm_emit(lsm_run *r, double z, long input_index, lsm_err *err) {
   if (input_index < 0 && r->fill) LSM_TRY(lsm_pinholes_fill(r->fill, r->opts, r->width, r->height, r->out, err));
-  break_zero_ties(r->out, (size_t)r->width * (size_t)r->height,
-                  fmin(r->opts->pixel_dx, r->opts->pixel_dy));
+  if (lsm_rule_on(&r->opts->rules, LSM_RULE_ZERO_TIES))
+    break_zero_ties(r->out, (size_t)r->width * (size_t)r->height,
+                    fmin(r->opts->pixel_dx, r->opts->pixel_dy));
   LSM_TRY(r->sink->emit(r->sink->ctx, r->out, r->width, r->height, z, input_index, err));
   r->done++;
   if (r->progress && r->progress->update)
@@ -36,11 +36,11 @@ lsm_status lsm_emit(lsm_run *r, double z, long input_index, lsm_err *err) {
 }
 
 lsm_status lsm_emit_input(lsm_run *r, const lsm_slice *s, size_t index, double z, lsm_err *err) {
-  LSM_TRY(lsm_slice_phi(s, r->opts->input, 0, 0, r->image_phi, err));
+  LSM_TRY(lsm_slice_phi(s, r->opts, 0, 0, r->image_phi, err));
   lsm_frame f;
   lsm_window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}, NULL, 0.0, 0, 0};
   LSM_TRY(lsm_frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height,
-                          r->opts->pixel_dx, r->opts->pixel_dy, err));
+                          r->opts->pixel_dx, r->opts->pixel_dy, &r->opts->rules, err));
   f.pad = 0;
   f.pad_y = 0;
   lsm_frame_extract(&f, r->image_phi, 0.0, r->out);

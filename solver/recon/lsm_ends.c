@@ -1,17 +1,11 @@
 /* lsm_ends: how an object ends inside a gap whose far side is an empty slice
- * (see the header for the rule and its measurements). */
+ * (see the header; the rules end-* in lsm_rules.h). */
 #include "solver/recon/lsm_ends.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* Every end keeps at least this share of a tip one power lower than its own,
- * A_F (2 (1 - sigma))^(p - 1), however fast the line, the parabola of its
- * areas or its own tip close it: a section where the object may still be is
- * not left empty (see the header). */
-static const double tip_floor = 0.1;
 
 static int compare_float(const void *x, const void *y) {
   const float a = *(const float *)x, b = *(const float *)y;
@@ -49,19 +43,14 @@ static void end_parts_free(end_parts *e) {
 }
 
 /* Exponent p of the tip past mid-gap, area A_F (2 (1 - sigma))^p, from the
- * areas of F and of N, the slice beyond it: 3 where the section narrows
- * toward the end by 10 % or more (the radius falls as (1 - sigma)^1.5), 2
- * where it keeps its size or grows (a flat end: the base of a scanned mesh, a
- * cut organ, which gives no hint of where the object stops inside the gap;
- * the radius falls linearly), linear in between.  One power less (a cone
- * where it narrows, the area falling linearly where it is flat) was the rule
- * up to session 40; the steeper tip closes an end earlier in the second half
- * of its gap, where an object cut one empty slice beyond it has most often
- * already ended (lsm_ends.h has the measurements). */
-static double end_tip_power(double area_f, double area_n) {
+ * areas of F and of N beyond it (rule end-tip-power): end_tip_narrow where
+ * the section narrows toward the end by end_cone_from or more, end_tip_flat
+ * (a cone's area) where it keeps its size or grows (a flat end gives no hint
+ * of where the object stops), linear in between. */
+static double end_tip_power(double area_f, double area_n, const lsm_rules *rules) {
   const double narrowing = area_f > 0.0 ? (area_n - area_f) / area_f : 1.0;
-  const double cone_from = 0.1; /* narrowing at which the tip is steepest */
-  return 2.0 + fmin(fmax(narrowing / cone_from, 0.0), 1.0);
+  return rules->end_tip_flat + (rules->end_tip_narrow - rules->end_tip_flat) *
+                                   fmin(fmax(narrowing / rules->end_cone_from, 0.0), 1.0);
 }
 
 /* Each component of `other` (N, or M beyond it) that overlaps F gives its
@@ -107,7 +96,8 @@ static lsm_status share_areas(const lsm_grid *other, end_parts *e, int32_t *labe
  * frame, or NULL (no slice beyond F: every part is a flat end); hn: the
  * height from N to F. */
 static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, double hn,
-                                 const lsm_grid *nm, end_parts *e, lsm_err *err) {
+                                 const lsm_grid *nm, const lsm_rules *rules, end_parts *e,
+                                 lsm_err *err) {
   memset(e, 0, sizeof *e);
   const int nx = full->nx, ny = full->ny;
   const size_t n = (size_t)nx * (size_t)ny;
@@ -120,6 +110,10 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
     return err ? err->status : LSM_ERR_NOMEM;
   }
   e->count = lsm_grid_label_components(full, 0.0f, e->region, queue);
+  if (!lsm_rule_on(rules, LSM_RULE_END_PARTS) && e->count > 1) { /* the section as one part */
+    for (size_t k = 0; k < n; ++k) e->region[k] = e->region[k] >= 0 ? 0 : -1;
+    e->count = 1;
+  }
   const int m = e->count;
   e->part = lsm_alloc((size_t)m + 1, sizeof *e->part, err, "end components");
   e->first = e->part ? lsm_alloc((size_t)m + 2, sizeof *e->first, err, "end components") : NULL;
@@ -156,14 +150,18 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
   }
   for (int c = 0; c < m; ++c) {
     end_part *pc = &e->part[c];
-    /* A part mostly outside N (less than 40 % nested) grows out toward the
-     * end (a tail, a paw, a thin part meeting a wide body): N's area says
-     * nothing of how it stops, and it is a flat end; from 60 % nested it
-     * narrows like N -> F; in between, a share of each. */
+    /* A part mostly outside N grows out toward the end (a tail, a paw, a thin
+     * part meeting a wide body): N's area says nothing of how it stops, and
+     * it is a flat end (rule end-flat-share). */
     const double share = pc->area_f > 0.0 ? pc->nested / pc->area_f : 0.0;
-    pc->weight = nb ? fmin(fmax((share - 0.4) / 0.2, 0.0), 1.0) : 0.0;
+    pc->weight = !nb ? 0.0
+                 : !lsm_rule_on(rules, LSM_RULE_END_FLAT_SHARE)
+                     ? 1.0
+                     : fmin(fmax((share - rules->end_share_flat) / rules->end_share_ramp, 0.0), 1.0);
     pc->rate = nb ? fmin((pc->area_f - pc->area_n) / hn, 0.0) : 0.0;
-    pc->power = 2.0 + pc->weight * (end_tip_power(pc->area_f, pc->area_n) - 2.0);
+    pc->power = rules->end_tip_flat;
+    if (lsm_rule_on(rules, LSM_RULE_END_TIP_POWER))
+      pc->power += pc->weight * (end_tip_power(pc->area_f, pc->area_n, rules) - rules->end_tip_flat);
   }
   /* every cell joins the part nearest to it (breadth-first from the parts),
    * so each part's erosion moves the field around it */
@@ -197,8 +195,8 @@ static size_t cells_kept(const float *sorted, size_t count, size_t cut, float ti
  * (full), so nothing grows past F.  scratch holds nx * ny floats, raise
  * count doubles. */
 static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e,
-                        const double *target, const double *least, float *scratch,
-                        double *raise) {
+                        const double *target, const double *least, int tie_nearer,
+                        float *scratch, double *raise) {
   const int nx = work->nx;
   for (int c = 0; c < e->count; ++c) {
     /* the part's cells' values, those inside (<= 0) first: each side is
@@ -224,12 +222,11 @@ static void erode_parts(lsm_grid *work, const lsm_grid *full, const end_parts *e
       /* cells tied with the cut (the signed distance of a pixel mask has
        * many equal values: a straight edge's row all half a pixel deep)
        * leave together; but where that would keep less than half the
-       * target, they stay when that comes nearer it (a section of 7 cells
-       * eroded to 6.6 keeps 7, not the one cell deeper than its six tied
-       * ones: small sections would vanish at the first step).  A target
-       * below 1 still empties the part. */
+       * target, they stay when that comes nearer it (rule end-tie-nearer: a
+       * section of 7 cells eroded to 6.6 keeps 7, not the one cell deeper
+       * than its six tied ones).  A target below 1 still empties the part. */
       size_t cut = keep;
-      if (keep > 0) {
+      if (keep > 0 && tie_nearer) {
         size_t past = keep;
         while (past < count && scratch[past] < scratch[keep] + tie) ++past;
         const double fewer = (double)cells_kept(scratch, count, keep, tie);
@@ -282,6 +279,7 @@ struct lsm_end {
   int has_beyond;       /* there is a slice N beyond F */
   lsm_grid *slope;      /* per cell max(phi_F - phi_N, 0): the slope times h_N (trend) */
   end_parts parts;      /* F's components and how each ends (trend) */
+  const lsm_rules *rules; /* the rules and constants (borrowed) */
   double *target;       /* per part: cells kept at the current sigma, at most */
   double *least;        /* per part: and at least (a tenth of the tip) */
   double *raise;        /* per part: the erosion that keeps them */
@@ -303,12 +301,15 @@ void lsm_end_destroy(lsm_end **end) {
 
 lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h_beyond,
                           const lsm_grid *farther, double h_farther, double H,
-                          lsm_end_profile profile, lsm_end **out, lsm_err *err) {
+                          lsm_end_profile profile, const lsm_rules *rules, lsm_end **out,
+                          lsm_err *err) {
   *out = NULL;
+  if (!rules) rules = lsm_rules_defaults();
   lsm_end *e = lsm_alloc(1, sizeof *e, err, "end of an object");
   if (!e) return err ? err->status : LSM_ERR_NOMEM;
   memset(e, 0, sizeof *e);
   e->profile = profile;
+  e->rules = rules;
   e->full = full;
   e->R = lsm_end_depth(full);
   e->H = H;
@@ -325,15 +326,17 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
     const double hn = beyond ? h_beyond : 1.0;
     e->trend_reach = hn;
     e->has_beyond = beyond != NULL;
-    /* the slope times h_N: a difference of phi, whatever the units of z */
+    /* the slope times h_N: a difference of phi, whatever the units of z
+     * (rule end-trend) */
+    const int trend = beyond && lsm_rule_on(rules, LSM_RULE_END_TREND);
     for (int j = 0; j < full->ny; ++j)
       for (int i = 0; i < full->nx; ++i)
         LSM_AT(e->slope, i, j) =
-            beyond ? fmaxf(LSM_AT(full, i, j) - LSM_AT(beyond, i, j), 0.0f) : 0.0f;
+            trend ? fmaxf(LSM_AT(full, i, j) - LSM_AT(beyond, i, j), 0.0f) : 0.0f;
     /* with no slice N beyond F (a lone section) nothing tells how the object
      * ends: every part is a flat end */
     e->h_farther = h_farther;
-    st = end_parts_find(full, beyond, hn, beyond ? farther : NULL, &e->parts, err);
+    st = end_parts_find(full, beyond, hn, beyond ? farther : NULL, rules, &e->parts, err);
   }
   const size_t parts = (size_t)e->parts.count + 1;
   if (st == LSM_OK && !(e->target = lsm_alloc(parts, sizeof *e->target, err, "end parts")))
@@ -352,14 +355,18 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
 
 void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
   const lsm_grid *full = e->full;
+  const lsm_rules *rules = e->rules;
   if (!lsm_end_profile_is_trend(e->profile)) {
     const float depth = (float)lsm_end_cap_depth(e->profile, e->R, sigma, full->dx);
     for (int j = 0; j < work->ny; ++j)
       for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + depth;
     return;
   }
-  /* the trend carried sigma H past F, at most h_N, in units of h_N */
-  const float rise = (float)fmin(sigma * (e->H / e->trend_reach), 1.0);
+  /* the trend carried sigma H past F, at most h_N (rule end-trend-reach), in
+   * units of h_N */
+  const double carried = sigma * (e->H / e->trend_reach);
+  const float rise =
+      (float)(lsm_rule_on(rules, LSM_RULE_END_TREND_REACH) ? fmin(carried, 1.0) : carried);
   for (int j = 0; j < work->ny; ++j)
     for (int i = 0; i < work->nx; ++i)
       LSM_AT(work, i, j) = LSM_AT(full, i, j) + rise * LSM_AT(e->slope, i, j);
@@ -371,16 +378,17 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
     const end_part *pc = &e->parts.part[c];
     const double tip_area = pc->area_f * pow(tip, pc->power);
     /* With a third section M beyond N the parabola through the areas of M,
-     * N and F caps the narrowing share; without M the line through A_N and
-     * A_F does, and the parabola through A_N, A_F and zero at the empty
-     * slice, the latest a quadratic area through N and F can close. */
+     * N and F caps the narrowing share (rule end-parabola); without M the
+     * line through A_N and A_F does (rule end-line), and the parabola through
+     * A_N, A_F and zero at the empty slice, the latest a quadratic area
+     * through N and F can close. */
     const int has_m = pc->has_m && e->h_farther > 0.0;
     e->target[c] = tip_area;
-    if (!has_m) {
+    if (!has_m && lsm_rule_on(rules, LSM_RULE_END_LINE)) {
       const double narrowing = fmax(pc->weight * (pc->area_f + sigma * e->H * pc->rate), 0.0);
       e->target[c] = fmin(narrowing + (1.0 - pc->weight) * pc->area_f, tip_area);
     }
-    if (e->has_beyond) {
+    if (e->has_beyond && lsm_rule_on(rules, LSM_RULE_END_PARABOLA)) {
       /* Newton's form, z from F toward the end */
       const double hn = e->trend_reach, z = sigma * e->H;
       const double d1 = (pc->area_f - pc->area_n) / hn;
@@ -392,9 +400,10 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
         curvature = (-pc->area_f / e->H - d1) / (e->H + hn);
       }
       /* a parabola opening upward is held at its vertex past it: an area
-       * that shrank toward F and would grow again closes no later */
+       * that shrank toward F and would grow again closes no later (rule
+       * end-parabola-vertex) */
       double zc = z;
-      if (curvature > 0.0) {
+      if (curvature > 0.0 && lsm_rule_on(rules, LSM_RULE_END_PARABOLA_VERTEX)) {
         const double z_vertex = -(d1 + curvature * hn) / (2.0 * curvature);
         if (z_vertex > 0.0 && z > z_vertex) zc = z_vertex;
       }
@@ -402,8 +411,12 @@ void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
       e->target[c] = fmin(e->target[c], (1.0 - pc->weight) * pc->area_f +
                                             pc->weight * fmin(fmax(parabola, 0.0), pc->area_f));
     }
-    e->least[c] = tip_floor * pc->area_f * pow(tip, pc->power - 1.0);
+    /* (rule end-floor) */
+    e->least[c] = lsm_rule_on(rules, LSM_RULE_END_FLOOR)
+                      ? rules->end_floor * pc->area_f * pow(tip, pc->power - 1.0)
+                      : 0.0;
     e->target[c] = fmax(e->target[c], e->least[c]);
   }
-  erode_parts(work, full, &e->parts, e->target, e->least, e->scratch, e->raise);
+  erode_parts(work, full, &e->parts, e->target, e->least,
+              lsm_rule_on(rules, LSM_RULE_END_TIE_NEARER), e->scratch, e->raise);
 }

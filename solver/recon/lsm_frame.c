@@ -8,32 +8,24 @@
 #include "solver/recon/lsm_pchip.h"
 #include "solver/recon/lsm_register.h"
 
-/* --align auto: hull alignment for this pair only when the shape has moved.
- * Two tests: the shapes overlap little in place (intersection over union
- * below 1/2: the morph alone would shrink one and grow the other rather than
- * move it), and the translation of largest overlap (lsm_register) lies nearer
- * the centroid difference than no shift at all, and moving by the centroid
- * difference does overlap more.  A centroid can move while the shape stays: a
- * part grows out on one side (ears above a head) or shrinks away; then the
- * best translation stays near zero and the pair is morphed in place. */
-/* A centroid offset rounded to whole pixels, halves upward: rounding half
- * away from zero (lround) would put two shapes 16 px apart at offsets -7.5
- * and 8.5 px from the centre 17 px apart in the aligned frame. */
+/* Halves round upward: rounding half away from zero (lround) would put two
+ * shapes 16 px apart at offsets -7.5 and 8.5 px from the centre 17 px apart
+ * in the aligned frame. */
 int lsm_pixel_shift(double offset) { return (int)floor(offset + 0.5); }
 
-/* auto alignment's thresholds (see resolve_align) */
-static const double align_apart_overlap = 0.1; /* in-place overlap / smaller area below this: apart, */
-static const double align_apart_iou = 0.25;    /* if the IoU at the best translation is at least this */
-static const double align_alike_iou = 0.5;     /* IoU at the best translation from this, */
-static const double align_alike_gain = 1.5;    /* and this many times the IoU in place: alike */
-
+/* --align auto: hull alignment for the pair a, b only when its shape moved
+ * rather than changed (rules align-*).  A centroid moves too where a part
+ * grows out on one side or shrinks away; then the best translation stays near
+ * zero.  A small section inside a large one fits it at many shifts, and a
+ * small part ending while a large one begins elsewhere fits inside it: in
+ * neither does the best shift say the shape moved. */
 static lsm_status resolve_align(lsm_align asked, const lsm_slice *a, const lsm_slice *b, int width,
-                                int height, double pixel_dx, double pixel_dy, lsm_align *align,
-                                lsm_err *err) {
+                                int height, double pixel_dx, double pixel_dy,
+                                const lsm_rules *rules, lsm_align *align, lsm_err *err) {
   *align = asked;
   if (asked != LSM_ALIGN_AUTO) return LSM_OK;
   *align = LSM_ALIGN_NONE;
-  if (a->empty || b->empty) return LSM_OK;
+  if (a->empty || b->empty || !lsm_rule_on(rules, LSM_RULE_ALIGN_AUTO)) return LSM_OK;
   const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
   const int dx = lsm_pixel_shift(b->cx - cx) - lsm_pixel_shift(a->cx - cx);
   const int dy = lsm_pixel_shift(b->cy - cy) - lsm_pixel_shift(a->cy - cy);
@@ -42,39 +34,39 @@ static lsm_status resolve_align(lsm_align asked, const lsm_slice *a, const lsm_s
   const size_t area_a = lsm_mask_count(&a->filled), area_b = lsm_mask_count(&b->filled);
   const size_t area = area_a + area_b;
   const double iou = (double)in_place / (double)(area - in_place);
-  if (iou >= 0.5) return LSM_OK;
-  if (lsm_mask_overlap(&a->filled, &b->filled, dx, dy) <= in_place) return LSM_OK;
+  if (lsm_rule_on(rules, LSM_RULE_ALIGN_IN_PLACE) && iou >= rules->align_in_place_iou)
+    return LSM_OK;
+  if (lsm_rule_on(rules, LSM_RULE_ALIGN_CENTROID_GAIN) &&
+      lsm_mask_overlap(&a->filled, &b->filled, dx, dy) <= in_place)
+    return LSM_OK;
   int tx, ty;
   LSM_TRY(lsm_register_shift(&a->filled, &b->filled, &tx, &ty, err));
   /* (physical lengths: a pixel need not be square) */
   const double wx = pixel_dx * pixel_dx, wy = pixel_dy * pixel_dy;
   const double to_centroid = wx * (tx - dx) * (tx - dx) + wy * (ty - dy) * (ty - dy);
-  if (to_centroid >= wx * tx * tx + wy * ty * ty) return LSM_OK;
-  /* A move, not a change of shape: either the two barely touch in place and
-   * the translation of largest overlap makes them somewhat alike (IoU >= 1/4),
-   * or that translation makes them alike (IoU >= 1/2, and 1.5 times the IoU in
-   * place: the shift explains most of the difference).  A small section
-   * overlapping a large one half or more in place (a part of an organ or a
-   * mesh narrowing, a section splitting) fits inside it at many shifts, so the
-   * best shift says nothing; it is morphed in place.  So is a small section
-   * apart from a large, different one (one part ending while another begins:
-   * at its best shift the small one is a small part of the large one). */
+  if (lsm_rule_on(rules, LSM_RULE_ALIGN_BEST_SHIFT) && to_centroid >= wx * tx * tx + wy * ty * ty)
+    return LSM_OK;
   const size_t smaller = area_a < area_b ? area_a : area_b;
   const size_t moved = lsm_mask_overlap(&a->filled, &b->filled, tx, ty);
   const double iou_moved = (double)moved / (double)(area - moved);
-  const int apart =
-      (double)in_place < align_apart_overlap * (double)smaller && iou_moved >= align_apart_iou;
-  const int alike = iou_moved >= align_alike_iou && iou_moved >= align_alike_gain * iou;
+  const int apart = lsm_rule_on(rules, LSM_RULE_ALIGN_APART) &&
+                    (double)in_place < rules->align_apart_overlap * (double)smaller &&
+                    iou_moved >= rules->align_apart_iou;
+  const int alike = lsm_rule_on(rules, LSM_RULE_ALIGN_ALIKE) &&
+                    iou_moved >= rules->align_alike_iou &&
+                    iou_moved >= rules->align_alike_gain * iou;
   if (apart || alike) *align = LSM_ALIGN_HULL;
   return LSM_OK;
 }
 
 lsm_status lsm_frame_setup(lsm_frame *f, const lsm_window *w, lsm_align asked, lsm_interp interp,
                            int width, int height, double pixel_dx, double pixel_dy,
-                           lsm_err *err) {
+                           const lsm_rules *rules, lsm_err *err) {
   memset(f, 0, sizeof *f);
+  if (!rules) rules = lsm_rules_defaults();
   lsm_align align, end_align = LSM_ALIGN_NONE;
-  LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, pixel_dx, pixel_dy, &align, err));
+  LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, pixel_dx, pixel_dy, rules, &align,
+                        err));
   f->width = width;
   f->height = height;
   f->aligned = align == LSM_ALIGN_HULL;
@@ -91,16 +83,14 @@ lsm_status lsm_frame_setup(lsm_frame *f, const lsm_window *w, lsm_align asked, l
       f->dy[k] = lsm_pixel_shift(sk->cy - cy);
     }
   }
-  /* A gap where the object ends (one side empty), cubic profile: if the pair
-   * beyond the full slice is aligned, the end keeps moving at that pair's
-   * centroid velocity (a straight continuation of the centroid path), so an
-   * oblique vessel or a drifting part ends where it was heading rather than
-   * where it was last seen; its shape is then compared with the slice beyond
+  /* A gap where the object ends, cubic profile (rule end-moves-on): if the
+   * pair beyond the full slice is aligned, the end keeps moving at that
+   * pair's centroid velocity, and its shape is compared with the slice beyond
    * in that pair's frame.  (linear sees only the pair: the end stays put.) */
   const int ke = a->empty ? 1 : 2, kf = 3 - ke, kn = a->empty ? 3 : 0;
   if (interp == LSM_INTERP_CUBIC && a->empty != b->empty && asked != LSM_ALIGN_NONE &&
-      lsm_window_usable(w, kn))
-    LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, pixel_dx, pixel_dy,
+      lsm_window_usable(w, kn) && lsm_rule_on(rules, LSM_RULE_END_MOVES_ON))
+    LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, pixel_dx, pixel_dy, rules,
                           &end_align, err));
   f->end_aligned = end_align == LSM_ALIGN_HULL;
   if (end_align == LSM_ALIGN_HULL) {
@@ -119,11 +109,12 @@ lsm_status lsm_frame_setup(lsm_frame *f, const lsm_window *w, lsm_align asked, l
     f->dy[ke] = lsm_pixel_shift(fmin(fmax(sf->cy + he * vy, 0.0), height - 1.0) - cy);
   }
   /* Slopes of the centroid path: secant (linear), or PCHIP through the
-   * neighbouring slices' centroids (cubic). */
+   * neighbouring slices' centroids (cubic; rule centroid-pchip). */
   const double sx = (f->dx[2] - f->dx[1]) / f->H, sy = (f->dy[2] - f->dy[1]) / f->H;
   f->mx[0] = f->mx[1] = sx;
   f->my[0] = f->my[1] = sy;
-  if (interp == LSM_INTERP_CUBIC && align == LSM_ALIGN_HULL && !a->empty && !b->empty) {
+  if (interp == LSM_INTERP_CUBIC && align == LSM_ALIGN_HULL && !a->empty && !b->empty &&
+      lsm_rule_on(rules, LSM_RULE_CENTROID_PCHIP)) {
     if (lsm_window_usable(w, 0)) {
       const double h0 = w->z[1] - w->z[0];
       f->mx[0] = lsm_pchip_slope(h0, f->H, (f->dx[1] - f->dx[0]) / h0, sx);

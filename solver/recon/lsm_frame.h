@@ -30,16 +30,15 @@ typedef struct lsm_frame {
   int end_aligned;       /* where the object ends: the pair beyond the full slice is aligned */
 } lsm_frame;
 
-/* A centroid offset from the image centre rounded to whole pixels, halves
- * upward. */
+/* A centroid offset from the image centre rounded to whole pixels. */
 int lsm_pixel_shift(double offset);
 
 /* The frame of the gap between w->s[1] (A) and w->s[2] (B): whether it is
  * aligned (asked: the --align mode), each slice's shift, the shift path's
- * slopes and the canvas margins. */
+ * slopes and the canvas margins.  rules: NULL for the defaults. */
 lsm_status lsm_frame_setup(lsm_frame *f, const lsm_window *w, lsm_align asked, lsm_interp interp,
                            int width, int height, double pixel_dx, double pixel_dy,
-                           lsm_err *err);
+                           const lsm_rules *rules, lsm_err *err);
 
 /* Writes the slice at fraction s from the working field into out (width x
  * height), undoing the alignment shift. */

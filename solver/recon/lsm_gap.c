@@ -9,6 +9,10 @@
 #include "solver/recon/lsm_unmatched.h"
 #include "solver/recon/lsm_zprofile.h"
 
+static int border_rule(const lsm_stack_opts *o) {
+  return lsm_rule_on(&o->rules, LSM_RULE_BORDER_EXTENSION);
+}
+
 void lsm_gap_free(lsm_gap *g) {
   lsm_grid_destroy(&g->phi_a);
   lsm_grid_destroy(&g->phi_b);
@@ -21,42 +25,36 @@ void lsm_gap_free(lsm_gap *g) {
   g->parts = 0;
 }
 
-/* Margin, in pixels, of the window around a moving part where its phi is
- * kept; farther out the output keeps the rest's phi (the zero level is
- * exact, |phi| there may exceed the distance to the part). */
-#define LSM_PART_MARGIN 16
-
-/* phi of one part on the window around it (bounding box + margin, within
- * the image); *ox, *oy: the window's origin on the image. */
+/* phi of one part on the window around it (bounding box + parts_margin_px,
+ * within the image); *ox, *oy: the window's origin on the image.  Farther
+ * out the output keeps the rest's phi (the zero level is exact either way). */
 static lsm_status part_phi(const lsm_mask *part, const lsm_stack_opts *o, lsm_grid **phi, int *ox,
                            int *oy, lsm_err *err) {
+  const int margin = (int)o->rules.parts_margin_px;
   int x0 = 0, y0 = 0, x1 = part->width - 1, y1 = part->height - 1;
   lsm_mask_bounds(part, &x0, &y0, &x1, &y1); /* a part is never empty */
-  x0 = x0 - LSM_PART_MARGIN < 0 ? 0 : x0 - LSM_PART_MARGIN;
-  y0 = y0 - LSM_PART_MARGIN < 0 ? 0 : y0 - LSM_PART_MARGIN;
-  x1 = x1 + LSM_PART_MARGIN >= part->width ? part->width - 1 : x1 + LSM_PART_MARGIN;
-  y1 = y1 + LSM_PART_MARGIN >= part->height ? part->height - 1 : y1 + LSM_PART_MARGIN;
+  x0 = x0 - margin < 0 ? 0 : x0 - margin;
+  y0 = y0 - margin < 0 ? 0 : y0 - margin;
+  x1 = x1 + margin >= part->width ? part->width - 1 : x1 + margin;
+  y1 = y1 + margin >= part->height ? part->height - 1 : y1 + margin;
   *ox = x0;
   *oy = y0;
   LSM_TRY(lsm_grid_create(x1 - x0 + 1, y1 - y0 + 1, (float)o->pixel_dx, (float)o->pixel_dy, phi,
                           err));
-  return lsm_mask_phi(part, LSM_INPUT_MASK, -x0, -y0, *phi, err);
+  return lsm_mask_phi(part, LSM_INPUT_MASK, border_rule(o), -x0, -y0, *phi, err);
 }
 
-/* Parts that moved (see lsm_parts.h): for an unaligned pair of two non-empty
- * mask slices, each pair of parts found is taken out of phi_A and phi_B and
- * moved on its own: at fraction s its phi is the blend of A's part moved by
- * s d and B's part moved back by (1 - s) d, so it travels the straight line
- * between the two centres instead of vanishing and growing again beside.
- * Unless both slices have nothing else left, the rest must keep something on
- * each side (else nothing moves: the halfway rule handles a side with
- * nothing). */
+/* Parts that moved (rule moving-parts; lsm_parts finds them): each pair is
+ * taken out of phi_A and phi_B and moves on its own, at fraction s the blend
+ * of A's part moved by s d and B's part moved back by (1 - s) d.  Unless both
+ * slices have nothing else left, the rest must keep something on each side
+ * (else nothing moves: the halfway rule handles a side with nothing). */
 static lsm_status gap_parts(const lsm_stack_opts *o, int width, int height, const lsm_window *w,
                             lsm_gap *g, lsm_err *err) {
   const lsm_slice *a = w->s[1], *b = w->s[2];
   lsm_part_move mv[LSM_PARTS_MAX];
   int count = 0;
-  LSM_TRY(lsm_parts_moved(&a->filled, &b->filled, mv, &count, err));
+  LSM_TRY(lsm_parts_moved(&a->filled, &b->filled, &o->rules, mv, &count, err));
   if (count == 0) return LSM_OK;
   lsm_mask rest_a = {0, 0, NULL}, rest_b = {0, 0, NULL};
   lsm_status st = lsm_mask_create(width, height, &rest_a, err);
@@ -87,8 +85,10 @@ static lsm_status gap_parts(const lsm_stack_opts *o, int width, int height, cons
   }
   if (usable && st == LSM_OK) {
     g->rest_empty = left_a == 0;
-    st = lsm_mask_phi(&rest_a, LSM_INPUT_MASK, g->f.pad, g->f.pad_y, g->phi_a, err);
-    if (st == LSM_OK) st = lsm_mask_phi(&rest_b, LSM_INPUT_MASK, g->f.pad, g->f.pad_y, g->phi_b, err);
+    const int border = border_rule(o);
+    st = lsm_mask_phi(&rest_a, LSM_INPUT_MASK, border, g->f.pad, g->f.pad_y, g->phi_a, err);
+    if (st == LSM_OK)
+      st = lsm_mask_phi(&rest_b, LSM_INPUT_MASK, border, g->f.pad, g->f.pad_y, g->phi_b, err);
   }
   lsm_mask_free(&rest_a);
   lsm_mask_free(&rest_b);
@@ -129,46 +129,52 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
   memset(g, 0, sizeof *g);
   const lsm_slice *a = w->s[1], *b = w->s[2];
   LSM_TRY(lsm_frame_setup(&g->f, w, o->align, o->interp, width, height, o->pixel_dx,
-                          o->pixel_dy, err));
+                          o->pixel_dy, &o->rules, err));
   const int nx = width + 2 * g->f.pad, ny = height + 2 * g->f.pad_y;
   const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
   lsm_status st = lsm_grid_create(nx, ny, hx, hy, &g->phi_a, err);
   if (st == LSM_OK) st = lsm_grid_create(nx, ny, hx, hy, &g->phi_b, err);
-  if (st == LSM_OK) st = lsm_slice_phi(a, o->input, g->f.pad - g->f.dx[1], g->f.pad_y - g->f.dy[1], g->phi_a, err);
-  if (st == LSM_OK) st = lsm_slice_phi(b, o->input, g->f.pad - g->f.dx[2], g->f.pad_y - g->f.dy[2], g->phi_b, err);
+  const lsm_frame *f = &g->f;
+  if (st == LSM_OK) st = lsm_slice_phi(a, o, f->pad - f->dx[1], f->pad_y - f->dy[1], g->phi_a, err);
+  if (st == LSM_OK) st = lsm_slice_phi(b, o, f->pad - f->dx[2], f->pad_y - f->dy[2], g->phi_b, err);
   if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
-      o->input == LSM_INPUT_MASK && !o->per_iteration && !g->f.aligned)
+      o->input == LSM_INPUT_MASK && !o->per_iteration && !f->aligned &&
+      lsm_rule_on(&o->rules, LSM_RULE_MOVING_PARTS))
     st = gap_parts(o, width, height, w, g, err);
-  const int caps = !a->empty && !b->empty && o->method != LSM_METHOD_BLEND && !g->rest_empty;
+  /* (blend stays the classic baseline, without the unmatched rule) */
+  const int caps = !a->empty && !b->empty && o->method != LSM_METHOD_BLEND && !g->rest_empty &&
+                   lsm_rule_on(&o->rules, LSM_RULE_UNMATCHED);
   const int slopes = o->interp == LSM_INTERP_CUBIC && !a->empty && !b->empty && !o->per_iteration &&
                      !g->rest_empty;
   /* phi of the non-empty neighbours, prev in A's place and next in B's: read
-   * by the branch test of cap_unmatched, then made secants by gap_slopes */
+   * by the branch test of the unmatched rule, then made secants for the
+   * slopes */
   lsm_grid *beyond[2] = {NULL, NULL};
   for (int side = 0; side < 2 && st == LSM_OK && (caps || slopes); ++side) {
     const int k = side ? 3 : 0;
     if (!lsm_window_usable(w, k)) continue;
     st = lsm_grid_create(nx, ny, hx, hy, &beyond[side], err);
     if (st == LSM_OK)
-      st = lsm_slice_phi(w->s[k], o->input, g->f.pad - g->f.dx[k], g->f.pad_y - g->f.dy[k], beyond[side], err);
+      st = lsm_slice_phi(w->s[k], o, f->pad - f->dx[k], f->pad_y - f->dy[k], beyond[side], err);
   }
   if (st == LSM_OK && caps) {
-    /* (blend stays the classic baseline, without this rule)
-     * both directions see the original sets: A's components against B's
-     * inside, then B's against A's (lowering phi_b inside A's unmatched
-     * components leaves it positive there, so B's inside is unchanged) */
-    st = lsm_cap_unmatched(g->phi_a, g->phi_b, beyond[0], err);
-    if (st == LSM_OK) st = lsm_cap_unmatched(g->phi_b, g->phi_a, beyond[1], err);
+    /* both directions see the original sets: lowering phi_b inside A's
+     * unmatched components leaves it positive there, so B's inside is
+     * unchanged for the second */
+    st = lsm_cap_unmatched(g->phi_a, g->phi_b, beyond[0], &o->rules, err);
+    if (st == LSM_OK) st = lsm_cap_unmatched(g->phi_b, g->phi_a, beyond[1], &o->rules, err);
   }
   if (st == LSM_OK && slopes)
-    st = lsm_zprofile_slopes(w, g->f.H, g->phi_a, g->phi_b, beyond, &g->slope_a, &g->slope_b, err);
+    st = lsm_zprofile_slopes(w, f->H, g->phi_a, g->phi_b, beyond, &o->rules, &g->slope_a,
+                             &g->slope_b, err);
   lsm_grid_destroy(&beyond[0]);
   lsm_grid_destroy(&beyond[1]);
   if (st != LSM_OK) {
     lsm_gap_free(g);
     return st;
   }
-  if (a->empty != b->empty) {
+  /* the halfway rule's constant for an empty side (per-iteration mode) */
+  if (a->empty != b->empty && lsm_rule_on(&o->rules, LSM_RULE_EMPTY_DEPTH)) {
     lsm_grid *full = a->empty ? g->phi_b : g->phi_a, *none = a->empty ? g->phi_a : g->phi_b;
     const double depth = lsm_end_depth(full);
     const double c = o->method == LSM_METHOD_BLEND ? depth : depth / log(2.0);

@@ -19,12 +19,17 @@ static lsm_status run_gap_cap(lsm_run *r, const lsm_window *w, lsm_gap *g, int a
   const lsm_stack_opts *o = r->opts;
   const lsm_grid *full = a_empty ? g->phi_b : g->phi_a;
   const int kn = a_empty ? 3 : 0, kf = a_empty ? 2 : 1; /* beyond, and the full slice */
-  /* --ends auto: the tip where the empty slice is the stack's first or last
-   * (no input slice beyond it), nothing past mid-gap where there is one */
+  /* --ends auto (rule ends-auto): the tip where the empty slice is the
+   * stack's first or last, nothing past mid-gap where more slices lie beyond */
   const int outermost = a_empty ? w->at_start : w->at_end;
-  const int halfway = o->ends == LSM_ENDS_HALFWAY || (o->ends == LSM_ENDS_AUTO && !outermost);
+  const int halfway =
+      o->ends == LSM_ENDS_HALFWAY ||
+      (o->ends == LSM_ENDS_AUTO && !outermost && lsm_rule_on(&o->rules, LSM_RULE_ENDS_AUTO));
+  /* with no slice beyond F the cubic end is a flat end (rule end-lone-flat) */
+  const int lone = !lsm_window_usable(w, kn) && !lsm_rule_on(&o->rules, LSM_RULE_END_LONE_FLAT);
   const lsm_end_profile profile =
-      o->interp == LSM_INTERP_CUBIC ? (halfway ? LSM_END_TREND_HALFWAY : LSM_END_TREND)
+      o->interp == LSM_INTERP_CUBIC && !lone
+          ? (halfway ? LSM_END_TREND_HALFWAY : LSM_END_TREND)
       : o->method == LSM_METHOD_BLEND ? LSM_END_BLEND
                                       : LSM_END_PARABOLOID;
   lsm_grid *work = NULL, *beyond = NULL;
@@ -34,7 +39,7 @@ static lsm_status run_gap_cap(lsm_run *r, const lsm_window *w, lsm_gap *g, int a
   if (lsm_end_profile_is_trend(profile) && lsm_window_usable(w, kn)) {
     st = lsm_grid_clone(full, &beyond, err);
     if (st == LSM_OK)
-      st = lsm_slice_phi(w->s[kn], o->input, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn],
+      st = lsm_slice_phi(w->s[kn], o, g->f.pad - g->f.dx[kn], g->f.pad_y - g->f.dy[kn],
                          beyond, err);
   }
   lsm_grid *farther = NULL;
@@ -47,11 +52,11 @@ static lsm_status run_gap_cap(lsm_run *r, const lsm_window *w, lsm_gap *g, int a
     }
     st = lsm_grid_clone(full, &farther, err);
     if (st == LSM_OK)
-      st = lsm_slice_phi(w->farther, o->input, g->f.pad - dx, g->f.pad_y - dy, farther, err);
+      st = lsm_slice_phi(w->farther, o, g->f.pad - dx, g->f.pad_y - dy, farther, err);
   }
   if (st == LSM_OK)
     st = lsm_end_create(full, beyond, fabs(w->z[kn] - w->z[kf]), farther,
-                        fabs(w->z_farther - w->z[kn]), g->f.H, profile, &end, err);
+                        fabs(w->z_farther - w->z[kn]), g->f.H, profile, &o->rules, &end, err);
   lsm_grid_destroy(&beyond);
   lsm_grid_destroy(&farther);
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
@@ -78,7 +83,8 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
     free(fill.cls);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  if (!lsm_mask_has_hole(&a->filled, fill.cls, fill.queue) &&
+  if (lsm_rule_on(&r->opts->rules, LSM_RULE_PINHOLE_FILL) &&
+      !lsm_mask_has_hole(&a->filled, fill.cls, fill.queue) &&
       !lsm_mask_has_hole(&b->filled, fill.cls, fill.queue))
     r->fill = &fill;
   lsm_gap g;
@@ -110,7 +116,7 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
       for (int j = 0; j < mix->ny; ++j)
         for (int i = 0; i < mix->nx; ++i)
           LSM_AT(mix, i, j) = (1.0f - s) * LSM_AT(g.phi_a, i, j) + s * LSM_AT(g.phi_b, i, j);
-      lsm_zprofile_add_cubic(g.phi_a, g.phi_b, g.slope_a, g.slope_b, fs[k], mix);
+      lsm_zprofile_add_cubic(g.phi_a, g.phi_b, g.slope_a, g.slope_b, fs[k], &r->opts->rules, mix);
       lsm_frame_extract(&g.f, mix, fs[k], r->out);
       st = lsm_emit(r, zs[k], -1, err);
       ps->slices++;

@@ -109,9 +109,11 @@ void lsm_part_move_free(lsm_part_move *move) {
   memset(move, 0, sizeof *move);
 }
 
-lsm_status lsm_parts_moved(const lsm_mask *a, const lsm_mask *b, lsm_part_move *moves, int *count,
-                           lsm_err *err) {
+lsm_status lsm_parts_moved(const lsm_mask *a, const lsm_mask *b, const lsm_rules *rules,
+                           lsm_part_move *moves, int *count, lsm_err *err) {
   *count = 0;
+  if (!rules) rules = lsm_rules_defaults();
+  const int clear = lsm_rule_on(rules, LSM_RULE_PARTS_CLEAR);
   const int w = a->width, h = a->height;
   const size_t cells = (size_t)w * (size_t)h;
   int32_t *la = lsm_alloc(cells, sizeof *la, err, "part labels");
@@ -137,13 +139,17 @@ lsm_status lsm_parts_moved(const lsm_mask *a, const lsm_mask *b, lsm_part_move *
     if (!pa[i].free) continue;
     double d1, d2, e1, e2;
     const int j = nearest(pb, nb, pa[i].cx, pa[i].cy, &d1, &d2);
-    if (!pb[j].free || d2 < LSM_PARTS_CLEAR * d1) continue;
-    if (nearest(pa, na, pb[j].cx, pb[j].cy, &e1, &e2) != i || e2 < LSM_PARTS_CLEAR * e1) continue;
+    if (!pb[j].free || (clear && d2 < rules->parts_clear * d1)) continue;
+    if (nearest(pa, na, pb[j].cx, pb[j].cy, &e1, &e2) != i || (clear && e2 < rules->parts_clear * e1))
+      continue;
     const double ratio = (double)pa[i].area / (double)pb[j].area;
-    if (ratio > 2.0 || ratio < 0.5) continue;
+    if (lsm_rule_on(rules, LSM_RULE_PARTS_AREA) &&
+        (ratio > rules->parts_area_ratio || ratio < 1.0 / rules->parts_area_ratio))
+      continue;
     const int dx = (int)lround(pb[j].cx - pa[i].cx), dy = (int)lround(pb[j].cy - pa[i].cy);
     const size_t inter = part_overlap(la, lb, w, h, i, j, dx, dy);
-    if (3 * inter < pa[i].area + pb[j].area - inter) continue; /* IoU < 1/3 */
+    const double iou = (double)inter / (double)(pa[i].area + pb[j].area - inter);
+    if (lsm_rule_on(rules, LSM_RULE_PARTS_IOU) && iou < rules->parts_iou) continue;
     pair_a[pairs] = i;
     pair_b[pairs] = j;
     dist[pairs] = d1;

@@ -1,33 +1,34 @@
-/* lsm_parts: parts of a slice that moved off their place by the next slice.
+/* lsm_parts: parts of a slice that moved off their place by the next slice
+ * (rule moving-parts).
  *
  * Two thin structures drifting apart (vessels after a bifurcation, the ears
  * of the bunny, the legs of a scanned figure) leave the slice's centroid in
- * place, so whole-slice alignment cannot follow them; every part moves by
- * more than its own width between sparse slices, so it overlaps nothing of
- * itself on the other side, and a morph in place would shrink it away and
- * grow it again beside.  lsm_parts_moved finds such parts, pairs them, and
- * gives the shift between their centres; the stack driver then moves each
- * pair along that shift (solver/recon/lsm_gap.c).
+ * place, so whole-slice alignment cannot follow them; a part that moves by
+ * more than its own width overlaps nothing of itself on the other side, and
+ * a morph in place would shrink it away and grow it again beside.
+ * lsm_parts_moved finds such parts, pairs them, and gives the shift between
+ * their centres; lsm_gap moves each pair along that shift.
  *
  * A part (an 8-connected component) of A and one of B are paired only when
  * all of these hold, so that nothing ambiguous moves:
  *   - neither overlaps any foreground of the other slice in place, and
  *     neither touches the image border;
  *   - each is the other's nearest component (centre to centre), and the next
- *     nearest is at least LSM_PARTS_CLEAR times farther, on both sides;
- *   - their areas are within a factor 2, and once A's part is moved by the
- *     shift between centres the two overlap at IoU >= 1/3.
+ *     nearest is at least parts_clear times farther, on both sides (rule
+ *     parts-clear);
+ *   - their areas are within a factor parts_area_ratio (rule parts-area), and
+ *     once A's part is moved by the shift between their centres the two
+ *     overlap at IoU >= parts_iou (rule parts-iou).
  */
 #ifndef LSM_PARTS_H
 #define LSM_PARTS_H
 
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_status.h"
+#include "solver/recon/lsm_rules.h"
 
 /* At most this many pairs are returned (the nearest first). */
 #define LSM_PARTS_MAX 8
-/* How much farther the next nearest component must be. */
-#define LSM_PARTS_CLEAR 1.5
 
 typedef struct lsm_part_move {
   lsm_mask part_a, part_b; /* the two parts, each alone on a mask of the slice's size */
@@ -35,9 +36,9 @@ typedef struct lsm_part_move {
 } lsm_part_move;
 
 /* Fills moves[0 .. *count) (caller frees each with lsm_part_move_free).  a
- * and b must have the same size. */
-lsm_status lsm_parts_moved(const lsm_mask *a, const lsm_mask *b, lsm_part_move *moves, int *count,
-                           lsm_err *err);
+ * and b must have the same size; rules: NULL for the defaults. */
+lsm_status lsm_parts_moved(const lsm_mask *a, const lsm_mask *b, const lsm_rules *rules,
+                           lsm_part_move *moves, int *count, lsm_err *err);
 void lsm_part_move_free(lsm_part_move *move);
 
 #endif

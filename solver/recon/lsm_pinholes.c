@@ -78,21 +78,14 @@ int lsm_mask_has_hole(const lsm_mask *m, uint8_t *cls, int32_t *queue) {
   return mark_enclosed(cls, m->width, m->height, queue) > 0;
 }
 
-/* Between two slices without holes (run_gap_regular), an output slice's
- * hole of at most PINHOLE_FILL_CELLS pixels, each less than two pixels from
- * the inside and inside one of the two slices, is filled: phi -> -phi there,
- * kept within the two slices' range (item 6 of the README's method).  Such
- * pinholes are not interpolated from the slices but made by the morph where
+/* Such holes are not interpolated from the slices but made by the morph where
  * two parts merge: the outside between them, a ridge of phi, does not sink
- * below zero all at once, and a cell of it left above zero is a hole of one
- * or two pixels (two balls merging, cut every 8th slice: 6 such holes; none
- * with --method blend).  Larger thin holes are left: on the atlas
- * structures most of their pixels are outside in the truth too, a notch
- * whose mouth the morph closed (README, method item 5). */
-#define PINHOLE_FILL_CELLS 4
+ * below zero all at once.  Larger thin holes are left: most of their pixels
+ * are notches whose mouth the morph closed, outside in the truth too. */
 lsm_status lsm_pinholes_fill(lsm_pinhole_fill *f, const lsm_stack_opts *o, int width, int height,
                              float *out, lsm_err *err) {
-  const float thin = (float)(2.0 * fmax(o->pixel_dx, o->pixel_dy));
+  const float thin = (float)(o->rules.pinhole_fill_thin_px * fmax(o->pixel_dx, o->pixel_dy));
+  const size_t most = (size_t)o->rules.pinhole_fill_cells;
   const int nx = width, ny = height;
   const size_t n = (size_t)nx * (size_t)ny;
   uint8_t *cls = f->cls;
@@ -104,13 +97,13 @@ lsm_status lsm_pinholes_fill(lsm_pinhole_fill *f, const lsm_stack_opts *o, int w
     cls[start] = 2; /* one hole at a time: its cells 1 -> 2 */
     queue[0] = (int32_t)start;
     const size_t tail = flood4(cls, nx, ny, queue, 1, 1, 1, 2);
-    if (tail > PINHOLE_FILL_CELLS) continue;
+    if (tail > most) continue;
     if (!f->phi_a) {
       const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
       LSM_TRY(lsm_grid_create(nx, ny, hx, hy, &f->phi_a, err));
       LSM_TRY(lsm_grid_create(nx, ny, hx, hy, &f->phi_b, err));
-      LSM_TRY(lsm_slice_phi(f->a, o->input, 0, 0, f->phi_a, err));
-      LSM_TRY(lsm_slice_phi(f->b, o->input, 0, 0, f->phi_b, err));
+      LSM_TRY(lsm_slice_phi(f->a, o, 0, 0, f->phi_a, err));
+      LSM_TRY(lsm_slice_phi(f->b, o, 0, 0, f->phi_b, err));
     }
     int inside_one = 1;
     for (size_t q = 0; q < tail && inside_one; ++q) {
@@ -126,15 +119,11 @@ lsm_status lsm_pinholes_fill(lsm_pinhole_fill *f, const lsm_stack_opts *o, int w
   return LSM_OK;
 }
 
-/* The pinhole cells of a gap (run_gap_morph): *pinhole[k] = 1 where the cell
- * is outside phi_a and in one of phi_a's pinholes, or inside phi_a and in one
- * of phi_b's; *pinhole stays NULL when neither slice has one.  A pinhole is
- * thinner than 2 cells, as thin_outside. */
-lsm_status lsm_pinholes_find(const lsm_grid *phi_a, const lsm_grid *phi_b, uint8_t **pinhole,
-                             lsm_err *err) {
+lsm_status lsm_pinholes_find(const lsm_grid *phi_a, const lsm_grid *phi_b, float thin_px,
+                             uint8_t **pinhole, lsm_err *err) {
   const int nx = phi_a->nx, ny = phi_a->ny;
   const size_t cells = (size_t)nx * (size_t)ny;
-  const float thin = 2.0f * fmaxf(phi_a->dx, phi_a->dy);
+  const float thin = thin_px * fmaxf(phi_a->dx, phi_a->dy);
   uint8_t *hole_a = lsm_alloc(cells, 1, err, "pinholes");
   uint8_t *hole_b = hole_a ? lsm_alloc(cells, 1, err, "pinholes") : NULL;
   int32_t *queue = hole_b ? lsm_alloc(cells, sizeof *queue, err, "pinholes") : NULL;

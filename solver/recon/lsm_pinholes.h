@@ -33,14 +33,16 @@ typedef struct lsm_pinhole_fill {
 int lsm_mask_has_hole(const lsm_mask *m, uint8_t *cls, int32_t *queue);
 
 /* Fills the pinholes of out, an output slice (width x height) of the gap
- * between f->a and f->b (see above). */
+ * between f->a and f->b: holes of at most o->rules.pinhole_fill_cells cells,
+ * each within pinhole_fill_thin_px of the inside and inside f->a or f->b. */
 lsm_status lsm_pinholes_fill(lsm_pinhole_fill *f, const lsm_stack_opts *o, int width, int height,
                              float *out, lsm_err *err);
 
-/* The pinhole cells of a gap (lsm_two_sided): *pinhole[k] = 1 where the cell
- * is outside phi_a and in one of phi_a's pinholes, or inside phi_a and in one
- * of phi_b's; *pinhole stays NULL when neither slice has one. */
-lsm_status lsm_pinholes_find(const lsm_grid *phi_a, const lsm_grid *phi_b, uint8_t **pinhole,
-                             lsm_err *err);
+/* The pinhole cells of a gap (lsm_two_sided), a pinhole being everywhere
+ * less than thin_px pixels from the inside: *pinhole[k] = 1 where the cell is
+ * outside phi_a and in one of phi_a's pinholes, or inside phi_a and in one of
+ * phi_b's; *pinhole stays NULL when neither slice has one. */
+lsm_status lsm_pinholes_find(const lsm_grid *phi_a, const lsm_grid *phi_b, float thin_px,
+                             uint8_t **pinhole, lsm_err *err);
 
 #endif

@@ -44,28 +44,18 @@ lsm_status lsm_slice_load(const lsm_slice_source *src, size_t index, int width, 
 
 static int clamp_index(int v, int n) { return v < 0 ? 0 : v >= n ? n - 1 : v; }
 
-/* phi of a mask (or outline) placed on phi's canvas with its pixel (0,0) at
- * cell (ox, oy).
- *
- * The image border is not the object's boundary: a shape that touches it
- * goes on beyond it.  The canvas margin around the image repeats the
- * image's border pixels, so such a shape goes on straight across the border
- * (a band across the image stays a band) and keeps its depth there, as the
- * input slices written out do (their signed distance is taken on the image,
- * where the border is no boundary).  With a background margin the border
- * column of a shape touching it stayed within half a pixel of the front and
- * barely moved: a band across the image, 11 -> 21 rows thick, was 11 -> 13
- * rows thick at its ends where it was 17 inside.  A shape clear of the
- * border is unchanged (its margin is background either way).  Not for
- * outlines (a contour is closed inside the image), nor for a mask full of
- * the image (its canvas would have no boundary at all: it keeps the
- * background margin). */
-lsm_status lsm_mask_phi(const lsm_mask *m, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
-                        lsm_err *err) {
+/* The margin repeats the image's border pixels (rule border-extension), so a
+ * shape touching the border goes on straight across it and keeps its depth
+ * there, as the input slices written out do (their signed distance is taken
+ * on the image).  A shape clear of the border is unchanged.  Not for outlines
+ * (a contour is closed inside the image), nor for a mask full of the image
+ * (its canvas would have no boundary at all). */
+lsm_status lsm_mask_phi(const lsm_mask *m, lsm_input_kind input, int border, int ox, int oy,
+                        lsm_grid *phi, lsm_err *err) {
   lsm_mask canvas;
   LSM_TRY(lsm_mask_create(phi->nx, phi->ny, &canvas, err));
   const size_t full = (size_t)m->width * (size_t)m->height;
-  const int extend = input == LSM_INPUT_MASK && lsm_mask_count(m) < full;
+  const int extend = border && input == LSM_INPUT_MASK && lsm_mask_count(m) < full;
   for (int cy = 0; cy < canvas.height; ++cy) {
     const int y = cy - oy;
     if (!extend && (y < 0 || y >= m->height)) continue;
@@ -83,9 +73,10 @@ lsm_status lsm_mask_phi(const lsm_mask *m, lsm_input_kind input, int ox, int oy,
   return st;
 }
 
-lsm_status lsm_slice_phi(const lsm_slice *s, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
+lsm_status lsm_slice_phi(const lsm_slice *s, const lsm_stack_opts *o, int ox, int oy, lsm_grid *phi,
                          lsm_err *err) {
-  return lsm_mask_phi(&s->raw, input, ox, oy, phi, err);
+  return lsm_mask_phi(&s->raw, o->input, lsm_rule_on(&o->rules, LSM_RULE_BORDER_EXTENSION), ox, oy,
+                      phi, err);
 }
 
 /* A neighbour takes part in the spline only if it exists and is not empty. */

@@ -27,12 +27,12 @@ lsm_status lsm_slice_load(const lsm_slice_source *src, size_t index, int width, 
 void lsm_slice_free(lsm_slice *s);
 
 /* phi of a mask (or outline) placed on phi's canvas with its pixel (0,0) at
- * cell (ox, oy); a mask touching the image border goes on across it into the
- * canvas margin (the border is not the object's boundary). */
-lsm_status lsm_mask_phi(const lsm_mask *m, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
-                        lsm_err *err);
-/* The same for a loaded slice (its raw mask). */
-lsm_status lsm_slice_phi(const lsm_slice *s, lsm_input_kind input, int ox, int oy, lsm_grid *phi,
+ * cell (ox, oy).  border: a mask touching the image border goes on across it
+ * into the canvas margin (the border is not the object's boundary). */
+lsm_status lsm_mask_phi(const lsm_mask *m, lsm_input_kind input, int border, int ox, int oy,
+                        lsm_grid *phi, lsm_err *err);
+/* The same for a loaded slice (its raw mask), as the options say. */
+lsm_status lsm_slice_phi(const lsm_slice *s, const lsm_stack_opts *o, int ox, int oy, lsm_grid *phi,
                          lsm_err *err);
 
 /* The four input slices around a gap: prev, A, B, next (prev/next may be

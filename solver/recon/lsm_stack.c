@@ -32,6 +32,7 @@ void lsm_stack_opts_default(lsm_stack_opts *opts) {
   opts->tol = 0.25;
   opts->max_iter = 100000;
   lsm_morph_opts_default(&opts->morph);
+  lsm_rules_default(&opts->rules);
 }
 
 void lsm_stack_opts_resolve(lsm_stack_opts *opts) {

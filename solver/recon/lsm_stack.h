@@ -40,6 +40,7 @@
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_names.h"
 #include "solver/pde/lsm_morph.h"
+#include "solver/recon/lsm_rules.h"
 #include "solver/base/lsm_status.h"
 
 /* The lengths a run accepts (pixel size, dz, the height between two input
@@ -90,12 +91,13 @@ LSM_ENUM(lsm_align, LSM_ALIGN, LSM_ALIGN_LIST, lsm_align_name,
 LSM_ENUM(lsm_interp, LSM_INTERP, LSM_INTERP_LIST, lsm_interp_name,
          lsm_interp_from_name);
 
-/* How the cubic profile ends an object at an empty slice (README, method
- * item 7); the linear profile always ends it at mid-gap.  tip: whole or narrowing up to mid-gap, then a tip closing at the empty slice;
- * halfway: the same up to mid-gap, nothing past it; auto: tip where the empty
- * slice is the first or last input slice (a stack cut one slice beyond the
- * object), halfway where more slices lie beyond it (a scan that covers more
- * than the object). */
+/* How the cubic profile ends an object at an empty slice (lsm_ends.h;
+ * solver/README.md, section 8); the linear profile always ends it at mid-gap.
+ * tip: whole or narrowing up to mid-gap, then a tip closing at the empty
+ * slice; halfway: the same up to mid-gap, nothing past it; auto: tip where
+ * the empty slice is the first or last input slice (a stack cut one slice
+ * beyond the object), halfway where more slices lie beyond it (a scan that
+ * covers more than the object). */
 #define LSM_ENDS_LIST(X)                                                        \
   X(LSM_ENDS_TIP, "tip")                                                        \
   X(LSM_ENDS_HALFWAY, "halfway")                                                \
@@ -117,6 +119,7 @@ typedef struct lsm_stack_opts {
   int max_iter;        /* most solver steps per pair (default 100000) */
   lsm_morph_opts morph;
   const struct lsm_gap_transport *transport; /* NULL: one process (see below) */
+  lsm_rules rules;     /* the reconstruction rules switched on, and their constants */
 } lsm_stack_opts;
 
 void lsm_stack_opts_default(lsm_stack_opts *opts);

@@ -22,9 +22,13 @@ void lsm_pair_stats_add_pls(lsm_pair_stats *ps, const lsm_morph *m) {
   ps->pls_steps += q->steps;
 }
 
-/* The two morphs of a gap joined at one cell (run_gap_morph): fwd =
- * phi_AB(s), rev = phi_BA(1 - s), a = phi_A, b = phi_B, thin_outside the
- * distance below which an outside is thin. */
+/* The two morphs of a gap joined at one cell: fwd = phi_AB(s), rev =
+ * phi_BA(1 - s), a = phi_A, b = phi_B.  Each is used where its front
+ * retreats, min(max(fwd, a), max(rev, b)), a union of the two insides; where
+ * the cell lies less than thin_outside outside one slice and deeper inside
+ * the other, the outsides are joined instead, max(min(fwd, a), min(rev, b)),
+ * since the morph opens a thin outside (a notch, a hole) of the target as
+ * late as it reaches a thin inside. */
 static inline float two_sided(float fwd, float rev, float a, float b, float thin_outside) {
   const float insides = lsm_minf(lsm_maxf(fwd, a), lsm_maxf(rev, b));
   const float outsides = lsm_maxf(lsm_minf(fwd, a), lsm_minf(rev, b));
@@ -32,43 +36,20 @@ static inline float two_sided(float fwd, float rev, float a, float b, float thin
   return (in < 0.0f && out > 0.0f && out < thin_outside && out < -in) ? outsides : insides;
 }
 
-/* Two-sided level-set morph of a gap (both slices non-empty).
- *
- * The morph equation moves a front point with normal speed -phi_T: parts of
- * A outside B retreat toward B at a speed equal to their distance from it,
- * which is linear in s under t(s) = -ln(1 - s), but parts of B outside A are
- * reached only as fast as the depth inside B allows, so thin features of the
- * target (a protrusion of width w and length L needs t ~ L / w) arrive late.
- * The forward morph A -> B is therefore used only where it retreats (inside
- * A), and the reverse morph B -> A at 1 - s where B retreats (inside B):
- *     phi(s) = min( max(phi_AB(s), phi_A), max(phi_BA(1 - s), phi_B) ).
- * Inside A and B both terms are negative; outside both, both are positive.
- * The equation is unchanged under phi -> -phi, so the outside has the same
- * lag: a thin notch or hole of B (a sulcus, a gap between two lobes) is
- * opened late by A -> B, and the min above, a union of the two insides,
- * keeps it shut.  Where a cell lies less than two cells outside one slice
- * and deeper inside the other (thin_outside), the outsides are joined
- * instead: phi(s) = max( min(phi_AB, phi_A), min(phi_BA(1 - s), phi_B) ).
- * (A brain's cortical surface, npm brainbrowser, voxelised at 128^3 and
- * sliced three ways, every 4th / 8th / 16th slice: pooled HD95 5.13 ->
- * 3.78, 6.33 -> 5.27, 8.22 -> 7.77 px, pooled Dice 0.9582 -> 0.9573, 0.9350
- * -> 0.9335, 0.8993 -> 0.8968; the other validation sets move by at most
- * 0.0005 pooled Dice.)
- * A pinhole, a closed outside component of one slice everywhere thinner than
- * thin_outside (find_pinholes), fits neither rule: a hole that drifts from
- * slice to slice is shut by the union at mid-gap, or split in two by joining
- * the outsides (each slice's hole recedes from the other's).  Its cells take
- * the blend of the two slices, (1 - s) phi_A + s phi_B, so with the cubic
- * profile the monotone spline through the slices: the hole moves and
- * resizes continuously.  (Scanned meshes, every 2nd slice: pooled HD95 1.49
- * -> 1.31 px, Dice 0.9817 -> 0.9816; the other sets move by at most 0.01 px
- * HD95 and 0.0001 Dice.)
- * The reverse snapshots are needed in the opposite order, so they are parked
- * in an anonymous temporary file, one working grid each. */
+/* The morph moves a front point with normal speed -phi_B: parts of A outside
+ * B retreat toward B at their distance from it (linear in s under
+ * t(s) = -ln(1 - s)), but parts of B outside A are reached only as fast as
+ * the depth inside B allows, so a thin protrusion of the target arrives late:
+ * hence both morphs (rule two-sided).  A pinhole of either slice takes the
+ * blend (rule pinhole-blend), so with the cubic profile the monotone spline:
+ * a drifting hole moves and resizes continuously.  The reverse snapshots are
+ * needed in the opposite order: they are parked (lsm_park). */
 lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const double *fs,
                              size_t n, lsm_pair_stats *ps, lsm_err *err) {
   const lsm_morph_opts *mo = &r->morph;
+  const lsm_rules *rules = &r->opts->rules;
   const int max_iter = r->opts->max_iter;
+  const int both = lsm_rule_on(rules, LSM_RULE_TWO_SIDED);
   const lsm_grid *pa = g->phi_a, *pb = g->phi_b;
   const size_t cells = (size_t)pa->nx * (size_t)pa->ny;
   lsm_morph *fwd = NULL, *rev = NULL;
@@ -81,7 +62,8 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
   if (st == LSM_OK) st = lsm_grid_clone(pa, &mix, err);
   if (st == LSM_OK && !(row = lsm_alloc(cells, sizeof(float), err, "morph snapshot")))
     st = err ? err->status : LSM_ERR_NOMEM;
-  if (st == LSM_OK) st = lsm_pinholes_find(pa, pb, &pinhole, err);
+  if (st == LSM_OK && both && lsm_rule_on(rules, LSM_RULE_PINHOLE_BLEND))
+    st = lsm_pinholes_find(pa, pb, (float)rules->join_thin_px, &pinhole, err);
   if (st == LSM_OK) st = lsm_park_open(cells, &park, err);
   /* Reverse morph, latest output first; snapshot k goes to slot k. */
   for (size_t q = n; st == LSM_OK && q-- > 0;) {
@@ -110,14 +92,19 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
       st = lsm_fail(err, lsm_morph_error(fwd)->status, NULL, "%s", lsm_morph_error(fwd)->msg);
       break;
     }
-    const float thin_outside = 2.0f * fmaxf(mix->dx, mix->dy);
+    const float thin_outside = lsm_rule_on(rules, LSM_RULE_THIN_JOIN)
+                                   ? (float)rules->join_thin_px * fmaxf(mix->dx, mix->dy)
+                                   : 0.0f;
     for (int j = 0; j < mix->ny; ++j) {
       const float *f = &LSM_AT(pf, 0, j), *a = &LSM_AT(pa, 0, j), *b = &LSM_AT(pb, 0, j);
       const float *rv = row + (size_t)j * mix->nx;
       float *o = &LSM_AT(mix, 0, j);
-      /* lsm_minf / lsm_maxf vectorise; fminf / fmaxf were library calls (4 %
-       * of a 512^2 run), and differ only for NaN, which the morph never holds */
-      for (int i = 0; i < mix->nx; ++i) o[i] = two_sided(f[i], rv[i], a[i], b[i], thin_outside);
+      /* lsm_minf / lsm_maxf vectorise (fminf / fmaxf are library calls) and
+       * differ only for NaN, which the morph never holds */
+      if (both)
+        for (int i = 0; i < mix->nx; ++i) o[i] = two_sided(f[i], rv[i], a[i], b[i], thin_outside);
+      else
+        memcpy(o, f, (size_t)mix->nx * sizeof *o);
       if (pinhole) {
         const uint8_t *pin = pinhole + (size_t)j * mix->nx;
         const float s = (float)fs[k];
@@ -126,9 +113,9 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
       }
     }
     /* cubic profile: the morph's departure from the straight line weighted
-     * by omega(s), plus the spline's */
-    if (g->slope_a) lsm_zprofile_weight(pa, pb, fs[k], mix);
-    lsm_zprofile_add_cubic(pa, pb, g->slope_a, g->slope_b, fs[k], mix);
+     * by omega(s) (rule omega), plus the spline's */
+    if (g->slope_a && lsm_rule_on(rules, LSM_RULE_OMEGA)) lsm_zprofile_weight(pa, pb, fs[k], mix);
+    lsm_zprofile_add_cubic(pa, pb, g->slope_a, g->slope_b, fs[k], rules, mix);
     lsm_frame_extract(&g->f, mix, fs[k], r->out);
     lsm_gap_paste_parts(g, fs[k], r->out);
     solver += lsm_run_seconds() - t0;

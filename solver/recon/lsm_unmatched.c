@@ -6,7 +6,7 @@
 
 #include "solver/base/lsm_grid.h"
 
-/* What cap_unmatched learns about one component. */
+/* What lsm_cap_unmatched learns about one component. */
 typedef struct unmatched_stats {
   float depth;        /* its largest depth */
   float gap_to_other; /* the smallest phi of the other side over its inside */
@@ -38,29 +38,23 @@ static void mark_branches(const lsm_grid *phi_x, const int32_t *label_x, const l
       }
 }
 
-/* The halfway rule for components.  A connected component C of {phi_x <= 0}
- * (slightly dilated, by 2 cells, so a component's front band goes with it)
- * that does not overlap {phi_y <= 0}, and lies farther from it than its own
- * depth, has no counterpart on the other side: it ends there, like a whole
- * object next to an empty slice.  Inside C the
- * other side's field is lowered to the constant R_C (C's largest depth), so
- * the blend (1 - s) phi_x + s R_C closes C at mid-gap, and the morph erodes
- * it at speed R_C instead of pulling it toward far-away shapes (with the
- * distance to them as speed, a small component would vanish at once).
- * A branch is left alone: C that was one piece, on the slice beyond x
- * (phi_before; NULL if none, or with the linear profile, which reads only the
- * pair), with a larger matched component has just split
- * off a body that goes on, and it recedes toward that body's shapes on the
- * other side, as the interpolation makes it (atlas.py every 2nd slice:
- * pooled HD95 1.42 -> 1.35 px, the brainstem cut axially 3.61 -> 1.41 px;
- * with any matched component, not only a larger one, the bunny's body,
- * one piece on the slice beyond with a small part that goes on, vanished
- * too early: meshes.py bunny-z every 16th 0.9648 -> 0.9566). */
+/* The halfway rule for components (rule unmatched).  A component C of
+ * {phi_x <= 0}, dilated by unmatched_grow_px so its front band goes with it,
+ * that overlaps nothing of {phi_y <= 0} and lies farther from it than its
+ * own depth ends like a whole object next to an empty slice: inside C, phi_y
+ * is lowered to C's largest depth R_C, so the blend closes C at mid-gap and
+ * the morph erodes it at speed R_C, not pulled toward far shapes.  Nearer
+ * than its depth (rule unmatched-near) it branches off them as it is; a
+ * branch of a larger body (rule branches) recedes toward the body. */
 lsm_status lsm_cap_unmatched(const lsm_grid *phi_x, lsm_grid *phi_y, const lsm_grid *phi_before,
-                             lsm_err *err) {
+                             const lsm_rules *rules, lsm_err *err) {
+  if (!rules) rules = lsm_rules_defaults();
+  if (!lsm_rule_on(rules, LSM_RULE_BRANCHES)) phi_before = NULL;
+  const int near = lsm_rule_on(rules, LSM_RULE_UNMATCHED_NEAR);
   const int nx = phi_x->nx, ny = phi_x->ny;
   const size_t n = (size_t)nx * (size_t)ny;
-  const float grow = 2.0f * (phi_x->dx > phi_x->dy ? phi_x->dx : phi_x->dy);
+  const float grow =
+      (float)rules->unmatched_grow_px * (phi_x->dx > phi_x->dy ? phi_x->dx : phi_x->dy);
   int32_t *label = lsm_alloc(n, sizeof *label, err, "component labels");
   int32_t *queue = label ? lsm_alloc(n, sizeof *queue, err, "component queue") : NULL;
   int32_t *label_before = queue && phi_before ? lsm_alloc(n, sizeof *label_before, err, "component labels")
@@ -95,14 +89,11 @@ lsm_status lsm_cap_unmatched(const lsm_grid *phi_x, lsm_grid *phi_y, const lsm_g
   if (phi_before) mark_branches(phi_x, label, phi_before, label_before, queue, cs);
   free(queue);
   free(label_before);
-  /* A component next to the other side's shapes (closer than its own depth)
-   * branches off them: the interpolation already makes it appear or vanish by
-   * mid-gap, from the right place. */
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const int32_t c = label[(size_t)j * nx + i];
       if (c < 0 || cs[c].matched || cs[c].branch || !(cs[c].depth > 0.0f) ||
-          !(cs[c].gap_to_other > cs[c].depth))
+          (near && !(cs[c].gap_to_other > cs[c].depth)))
         continue;
       float *y = &LSM_AT(phi_y, i, j);
       if (*y > cs[c].depth) *y = cs[c].depth;

@@ -11,11 +11,12 @@
 
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_status.h"
+#include "solver/recon/lsm_rules.h"
 
 /* Lowers phi_y inside the unmatched parts of phi_x (see above).  phi_before:
  * the slice beyond x, away from the gap, in x's frame, or NULL (no such
- * slice, or the linear profile). */
+ * slice, or the linear profile).  rules: NULL for the defaults. */
 lsm_status lsm_cap_unmatched(const lsm_grid *phi_x, lsm_grid *phi_y, const lsm_grid *phi_before,
-                             lsm_err *err);
+                             const lsm_rules *rules, lsm_err *err);
 
 #endif

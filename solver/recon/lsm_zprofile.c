@@ -7,40 +7,25 @@
 #include "solver/recon/lsm_ends.h"
 #include "solver/recon/lsm_pchip.h"
 
-/* Per-pixel PCHIP slopes at A and B, from the secants of the gap and of the
- * intervals beyond A and B:
- *   - a non-empty neighbour gives its secant (Fritsch-Carlson slope);
- *   - an empty neighbour (the object ends in that gap): 0 where the section
- *     grows toward the end, so where the object's widest part lies between
- *     the slices it is flat there instead of running straight at it (the
- *     secant, the rule before); where it shrinks toward the end, the
- *     three-point slope below from the gap and the interval beyond the other
- *     slice, as if the data ended here (where that slice is a last section
- *     too, an object with two sections, the interval to the empty slice
- *     beyond it, counted as its section eroded by its largest depth R; the
- *     secant when the other slice is the first or last input slice).  A
- *     rounded solid's profile is curved at its last sections,
- *     and the secant drew the gap beside them too thin: a ball cut every
- *     16th slice, 0.974 -> 0.995 Dice over those gaps.  The end gap itself
- *     continues with the secant (run_gap_cap), so the surface has a crease
- *     at the last section where the two differ: continuing the end with the
- *     three-point slope too closed ends faster, which the real sets do not
- *     want (the CT nodule every 4th and 8th 0.9193 -> 0.9181, 0.8569 ->
- *     0.8552; measurements in validation/measurements/organs.md);
- *   - a missing neighbour (the first or last input slice): the non-centred
- *     three-point slope from the gap and the interval on the other side
- *     (there an empty slice counts as phi + R, the section eroded by its
- *     largest depth R), or the secant when there is none (a lone gap).
- * Measured against the secants at both kinds of ends (validation/atlas.py,
- * 11 brain structures x 3 axes; padded.py, 13 shapes; meshes.py, 9 stacks):
- * pooled Dice every 8th 0.8681 -> 0.8759, 0.9552 -> 0.9626, 0.9555 -> 0.9554;
- * pooled HD95 4.22 -> 4.03, 2.65 -> 2.60, 3.13 -> 3.14 px; every 16th
- * (padded, meshes) 0.8985 -> 0.8998, 0.8954 -> 0.8984; with the ends at every
- * offset (end_offsets.py, where the first and last kept slices are empty)
- * the means do not move. */
+/* Per pixel, from the secants of the gap and of the intervals beyond A and B:
+ *   - a non-empty neighbour: the centred (Fritsch-Carlson) slope;
+ *   - where the data end on one side (no neighbour, or an empty one): the
+ *     non-centred three-point slope through the interval beyond the other
+ *     side (rule edge-slope), an empty slice there counting as that side's
+ *     section eroded by its largest depth R (rule empty-eroded), else the
+ *     gap's secant;
+ *   - next to an empty neighbour only shrinking toward the end, 0 where the
+ *     section grows toward it (rule end-slope-shrink): the widest part of an
+ *     object between its last two slices is flat there.
+ * The end gap itself continues with the secant (lsm_ends), so the surface
+ * has a crease at the last section where the two differ. */
 lsm_status lsm_zprofile_slopes(const lsm_window *w, double H, const lsm_grid *phi_a,
                                const lsm_grid *phi_b, lsm_grid *const beyond[2],
-                               lsm_grid **slope_a, lsm_grid **slope_b, lsm_err *err) {
+                               const lsm_rules *rules, lsm_grid **slope_a, lsm_grid **slope_b,
+                               lsm_err *err) {
+  const int edge = lsm_rule_on(rules, LSM_RULE_EDGE_SLOPE);
+  const int eroded = edge && lsm_rule_on(rules, LSM_RULE_EMPTY_ERODED);
+  const int shrink = lsm_rule_on(rules, LSM_RULE_END_SLOPE_SHRINK);
   /* Lengths in units of the gap H: a slope is stored times H (phi per gap),
    * the size of phi's own differences whatever the pixel size and spacing. */
   lsm_grid *outer[2] = {NULL, NULL}; /* phi differences beyond A (A - prev) and B (next - B) */
@@ -78,15 +63,14 @@ lsm_status lsm_zprofile_slopes(const lsm_window *w, double H, const lsm_grid *ph
           slope = side ? lsm_pchip_slope(1.0, h_outer[1], d, LSM_AT(outer[1], i, j) / h_outer[1])
                        : lsm_pchip_slope(h_outer[0], 1.0, LSM_AT(outer[0], i, j) / h_outer[0], d);
         else {
-          /* the data end on this side (no slice beyond it, or an empty one):
-           * the non-centred three-point slope through the slice beyond the
-           * other side, empty or not, else the gap's secant */
-          slope = outer[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d,
-                                                      LSM_AT(outer[other], i, j) / h_outer[other])
-                  : end[other] ? lsm_pchip_edge_slope(1.0, h_outer[other], d, end_secant[other])
-                               : d;
-          /* next to an empty slice, only shrinking toward the end */
-          if (end[side]) slope = side ? fmax(slope, 0.0) : fmin(slope, 0.0);
+          /* the data end on this side (no slice beyond it, or an empty one) */
+          slope = outer[other] && edge
+                      ? lsm_pchip_edge_slope(1.0, h_outer[other], d,
+                                             LSM_AT(outer[other], i, j) / h_outer[other])
+                  : end[other] && eroded
+                      ? lsm_pchip_edge_slope(1.0, h_outer[other], d, end_secant[other])
+                      : d;
+          if (end[side] && shrink) slope = side ? fmax(slope, 0.0) : fmin(slope, 0.0);
         }
         LSM_AT(m, i, j) = (float)slope; /* at most 3 |d| */
       }
@@ -94,19 +78,18 @@ lsm_status lsm_zprofile_slopes(const lsm_window *w, double H, const lsm_grid *ph
   return st;
 }
 
-/* Adds the monotone cubic's departure from the linear interpolant at s:
+/* The cubic's departure from the linear interpolant,
  *   Phi_cubic(s) - Phi_linear(s) = H [h10(s) (m_A - delta) + h11(s) (m_B - delta)],
- * delta = (phi_B - phi_A) / H (held as H m, so no division by H).  It
- * vanishes at s = 0 and 1, and its s-slope
- * there makes the z-slope of the result the PCHIP slope m — the same on both
- * sides of an input slice, so the profile is C1 across slices.  The sum is
- * kept within [min(phi_A, phi_B), max(phi_A, phi_B)]: the cubic alone never
- * leaves that range (blend), but added to the morph's departure it can (on
- * the bunny every 8th slice, 123 cells by at most 0.13 px), and the profile
- * must not overshoot its slices whatever the method. */
+ * delta = (phi_B - phi_A) / H (slopes held times H): it vanishes at s = 0 and
+ * 1, where its s-slope makes the z-slope of the result the PCHIP slope, the
+ * same on both sides of a slice.  The cubic alone never leaves the range of
+ * its two slices; added to the morph's departure it can, so the sum is kept
+ * within it (rule cubic-range). */
 void lsm_zprofile_add_cubic(const lsm_grid *phi_a, const lsm_grid *phi_b, const lsm_grid *slope_a,
-                            const lsm_grid *slope_b, double s, lsm_grid *field) {
+                            const lsm_grid *slope_b, double s, const lsm_rules *rules,
+                            lsm_grid *field) {
   if (!slope_a) return;
+  const int bounded = lsm_rule_on(rules, LSM_RULE_CUBIC_RANGE);
   double h00, h10, h01, h11;
   lsm_hermite_basis(s, &h00, &h10, &h01, &h11);
   const float c10 = (float)h10, c11 = (float)h11; /* slopes are per gap (times H) */
@@ -117,17 +100,16 @@ void lsm_zprofile_add_cubic(const lsm_grid *phi_a, const lsm_grid *phi_b, const 
     for (int i = 0; i < field->nx; ++i) {
       const float d = pb[i] - pa[i];
       const float v = o[i] + (c10 * (ma[i] - d) + c11 * (mb[i] - d)); /* a sum symmetric in A, B */
-      o[i] = lsm_minf(lsm_maxf(v, lsm_minf(pa[i], pb[i])), lsm_maxf(pa[i], pb[i]));
+      o[i] = bounded ? lsm_minf(lsm_maxf(v, lsm_minf(pa[i], pb[i])), lsm_maxf(pa[i], pb[i])) : v;
     }
   }
 }
 
+/* The discrete morph's error relative to the distance still to go grows like
+ * t e^-t, so read at t(s) = -ln(1 - s) its slope has a logarithmic
+ * singularity at the slices; omega vanishes with zero slope there and is 1 at
+ * mid-gap, where the morph matters. */
 void lsm_zprofile_weight(const lsm_grid *phi_a, const lsm_grid *phi_b, double s_gap, lsm_grid *field) {
-  /* The discrete morph's error relative to the distance still to go grows
-   * like t e^-t, so read at t(s) = -ln(1 - s) its slope has a logarithmic
-   * singularity at the slices; omega vanishes with zero slope there, which
-   * keeps the profile C1 across slices, and is 1 at mid-gap where the morph
-   * matters. */
   const float s = (float)s_gap, omega = 16.0f * s * s * (1.0f - s) * (1.0f - s);
   for (int j = 0; j < field->ny; ++j) {
     const float *a = &LSM_AT(phi_a, 0, j), *b = &LSM_AT(phi_b, 0, j);

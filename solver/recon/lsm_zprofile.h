@@ -13,21 +13,25 @@
 
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_status.h"
+#include "solver/recon/lsm_rules.h"
 #include "solver/recon/lsm_slice.h"
 
 /* The per-pixel slopes at A and B of the gap w (height H, fields phi_a,
  * phi_b) times H, into *slope_a and *slope_b (allocated; the caller frees
  * them, also on failure).  beyond[0], beyond[1]: phi of the non-empty
  * neighbours prev and next in A's and B's frame, or NULL; they are
- * overwritten. */
+ * overwritten.  rules: NULL for the defaults. */
 lsm_status lsm_zprofile_slopes(const lsm_window *w, double H, const lsm_grid *phi_a,
                                const lsm_grid *phi_b, lsm_grid *const beyond[2],
-                               lsm_grid **slope_a, lsm_grid **slope_b, lsm_err *err);
+                               const lsm_rules *rules, lsm_grid **slope_a, lsm_grid **slope_b,
+                               lsm_err *err);
 
 /* field := field + the cubic's departure from the linear interpolant at s,
- * kept within the range of phi_a and phi_b; nothing when slope_a is NULL. */
+ * kept within the range of phi_a and phi_b (rule cubic-range); nothing when
+ * slope_a is NULL. */
 void lsm_zprofile_add_cubic(const lsm_grid *phi_a, const lsm_grid *phi_b, const lsm_grid *slope_a,
-                            const lsm_grid *slope_b, double s, lsm_grid *field);
+                            const lsm_grid *slope_b, double s, const lsm_rules *rules,
+                            lsm_grid *field);
 
 /* field := lin + omega(s) (field - lin), lin = (1 - s) phi_a + s phi_b,
  * omega(s) = 16 s^2 (1 - s)^2: the morph's departure from the straight line,
