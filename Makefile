@@ -46,12 +46,14 @@ OPT     += -g -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-rec
 endif
 CFLAGS  ?=
 CFLAGS  += -std=c17 $(WARN) $(OPT) -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP
+# nifticlib's headers include each other by bare name from /usr/include/nifti
+CFLAGS  += -I/usr/include/nifti
 ifeq ($(MPI),1)
 CFLAGS  += -DLSM_WITH_MPI
 endif
-LDLIBS  += -lpng -ltiff -lz -lm -lOpenEXRCore -fopenmp -lOpenCL
+LDLIBS  += -lpng -ltiff -lz -lm -lOpenEXRCore -fopenmp -lOpenCL -lnifti2 -lteem
 
-DEBIAN_PACKAGES := gcc make pkg-config libpng-dev libtiff-dev zlib1g-dev libcmocka-dev python3 python3-numpy python3-pil python3-matplotlib libopenexr-dev python3-vtk9 python3-nibabel openimageio-tools \
+DEBIAN_PACKAGES := gcc make pkg-config libpng-dev libtiff-dev zlib1g-dev libcmocka-dev libnifti2-dev libteem-dev python3 python3-numpy python3-pil python3-matplotlib libopenexr-dev python3-vtk9 python3-nibabel openimageio-tools \
                    ocl-icd-opencl-dev opencl-headers pocl-opencl-icd libopenmpi-dev openmpi-bin
 DEPS_STAMP := $(BUILD)/.deps-ok
 # Only for validation/end_offsets.py's plain-spline references (make validate).
@@ -68,14 +70,15 @@ EXAMPLE_SRC := $(wildcard examples/*.c)
 EXAMPLE_BIN := $(patsubst examples/%.c,$(BUILD)/examples/%,$(EXAMPLE_SRC))
 VALIDATION_SRC := $(wildcard validation/*.c)
 VALIDATION_BIN := $(patsubst validation/%.c,$(BUILD)/validation/%,$(VALIDATION_SRC))
-FUZZ_NAMES := png tiff heights cli
+FUZZ_NAMES := png tiff heights cli labels
 REPLAY_BIN := $(patsubst %,$(BUILD)/fuzz-replay/replay_%,$(FUZZ_NAMES))
 FUZZ_CC ?= clang
 FUZZ_PACKAGES := clang libclang-rt-14-dev libomp-dev
 FUZZ_DEPS_STAMP := $(BUILD)/.fuzz-deps-ok
 FUZZ_SECONDS ?= 60
 FUZZ_CFLAGS := -std=c17 -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
-               -fno-sanitize-recover=undefined -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP
+               -fno-sanitize-recover=undefined -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP \
+               -I/usr/include/nifti
 FUZZ_OBJ := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(LIB_SRC))
 FUZZ_BIN := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
 

@@ -7,7 +7,7 @@ set -u
 BUILD=${1:-build}
 pass=0
 fail=0
-for name in png tiff heights cli; do
+for name in png tiff heights cli labels; do
   bin="$BUILD/fuzz-replay/replay_$name"
   if [ ! -x "$bin" ]; then
     echo "fuzz-corpus: FAIL: $bin is missing (make test builds it)"

@@ -7,7 +7,7 @@
 # --method ls and --method pls, must agree within 1e-3 in every voxel of
 # volume.nrrd (and pls runs must report the same particle counters in
 # run.json); `lsmorph devices` lists a device; a missing device index fails
-# with exit 1 and a message; the second run hits the kernel cache.  Prints one line per failed check and
+# with exit 1 and a message; no kernel cache of lsmorph's own is written.  Prints one line per failed check and
 # "opencl: N passed, N failed".  Without any OpenCL platform or device the
 # checks are skipped (the Makefile installs PoCL, so on CI they run).
 set -u
@@ -22,7 +22,7 @@ SUITE=opencl
 
 need "$LSM" "$GEN"
 make_tmp
-# The kernel cache of these runs lives and dies with the temporary folder;
+# XDG_CACHE_HOME is a temporary folder (lsmorph must write nothing there);
 # PoCL's own cache (also under XDG_CACHE_HOME) stays where it was.
 if [ -z "${POCL_CACHE_DIR:-}" ]; then
   case ${XDG_CACHE_HOME:-} in
@@ -140,13 +140,11 @@ compare() {
 }
 
 compare candlestick "$SET" --heights "$SET/heights.txt" --dz 10
-check "the first OpenCL run missed the kernel cache" \
-  grep -q '"kernel_cache_hit": false' "$TMP/candlestick-opencl/run.json"
+check "run.json reports the program build (kernel_cache_hit false: no cache of our own)" \
+  grep -q '"build_seconds": [0-9.e-]*, "kernel_cache_hit": false}' "$TMP/candlestick-opencl/run.json"
 compare candlestick-roefix-rk3 "$SET" --heights "$SET/heights.txt" --dz 10 \
   --scheme roe-fix --time rk3 --reinit-every 10
-check "the second OpenCL run hit the kernel cache" \
-  grep -q '"kernel_cache_hit": true' "$TMP/candlestick-roefix-rk3-opencl/run.json"
-check "one kernel binary in the cache" [ "$(ls "$XDG_CACHE_HOME/lsmorph" | grep -c '\.clbin$')" -eq 1 ]
+check "no kernel cache of lsmorph's own" [ ! -e "$XDG_CACHE_HOME/lsmorph" ]
 compare candlestick-weno5-rk3 "$SET" --heights "$SET/heights.txt" --dz 10 --scheme weno5 --time rk3
 # The particle level set on the device (seeded on the host, stepped and
 # corrected on the device), with and without host reseeding.

@@ -25,24 +25,17 @@
  * of kernels/lsm_particle_cell.h.  The host reads back five counters per
  * correction.  Removed particles are kept with a dead state, not compacted.
  *
- * Program binaries are cached in $XDG_CACHE_HOME/lsmorph (else
- * $HOME/.cache/lsmorph), one file per 64-bit FNV-1a key over the source, the
- * build options, the device name, the driver version and the platform
- * version; written atomically (temporary file + rename), skipped silently
- * when the folder cannot be written. */
+ * The program is built from source at every open: the OpenCL implementations'
+ * own caches (PoCL's, NVIDIA's) serve repeated builds (kernels/README.md). */
 #define CL_TARGET_OPENCL_VERSION 120
 #include <CL/cl.h>
 
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <time.h>
-#include <unistd.h>
 
 #include "kernels/lsm_particle_cell.h"
 #include "lsm_kernels.h" /* lsm_kernel_source[]: morph.cl + the headers, NUL-terminated */
@@ -324,135 +317,6 @@ static void cl_close_ctx(void **vctx) {
   *vctx = NULL;
 }
 
-/* ---- kernel cache ------------------------------------------------------------------------ */
-
-#define LSM_CACHE_MAGIC "LSMKCL02"
-#define LSM_CACHE_MAX_BYTES ((size_t)256 << 20)
-
-static uint64_t fnv1a(uint64_t h, const void *data, size_t n) {
-  const unsigned char *p = data;
-  for (size_t k = 0; k < n; ++k) {
-    h ^= p[k];
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
-static uint64_t fnv1a_str(uint64_t h, const char *s) {
-  return fnv1a(h, s, strlen(s) + 1); /* the NUL separates the fields */
-}
-
-/* mkdir that accepts an existing folder. */
-static int ensure_dir(const char *path) {
-  if (mkdir(path, 0700) == 0 || errno == EEXIST) {
-    struct stat sb;
-    return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
-  }
-  return 0;
-}
-
-/* The cache folder, created if needed; 0 when there is none usable. */
-static int cache_dir(char *buf, size_t size) {
-  const char *xdg = getenv("XDG_CACHE_HOME");
-  const char *home = getenv("HOME");
-  int n;
-  if (xdg && xdg[0] == '/') {
-    if (!ensure_dir(xdg)) return 0;
-    n = snprintf(buf, size, "%s/lsmorph", xdg);
-  } else if (home && home[0] == '/') {
-    char dot[4096];
-    n = snprintf(dot, sizeof dot, "%s/.cache", home);
-    if (n < 0 || (size_t)n >= sizeof dot || !ensure_dir(dot)) return 0;
-    n = snprintf(buf, size, "%s/.cache/lsmorph", home);
-  } else {
-    return 0;
-  }
-  if (n < 0 || (size_t)n >= size || !ensure_dir(buf)) return 0;
-  return access(buf, R_OK | W_OK | X_OK) == 0;
-}
-
-static uint64_t cache_key(const cl_ctx *c, const char *options) {
-  char dev[256], driver[256], platver[256];
-  device_str(c->device, CL_DEVICE_NAME, dev, sizeof dev);
-  device_str(c->device, CL_DRIVER_VERSION, driver, sizeof driver);
-  platform_str(c->platform, CL_PLATFORM_VERSION, platver, sizeof platver);
-  uint64_t h = 0xcbf29ce484222325ULL;
-  h = fnv1a_str(h, LSM_CACHE_MAGIC);
-  h = fnv1a(h, lsm_kernel_source, sizeof lsm_kernel_source - 1);
-  h = fnv1a_str(h, options);
-  h = fnv1a_str(h, dev);
-  h = fnv1a_str(h, driver);
-  h = fnv1a_str(h, platver);
-  return h;
-}
-
-/* File layout: magic (8 bytes), key (8), binary size (8), FNV-1a of the
- * binary (8), binary.  The checksum keeps a damaged file from reaching the
- * driver (PoCL crashes on a corrupt binary). */
-#define LSM_CACHE_HEAD 32
-
-static unsigned char *cache_read(const char *path, uint64_t key, size_t *size) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  unsigned char head[LSM_CACHE_HEAD];
-  unsigned char *bin = NULL;
-  uint64_t k = 0, n = 0, sum = 0;
-  if (fread(head, 1, sizeof head, f) == sizeof head && memcmp(head, LSM_CACHE_MAGIC, 8) == 0) {
-    memcpy(&k, head + 8, 8);
-    memcpy(&n, head + 16, 8);
-    memcpy(&sum, head + 24, 8);
-    if (k == key && n > 0 && n <= LSM_CACHE_MAX_BYTES && (bin = malloc((size_t)n)) != NULL &&
-        (fread(bin, 1, (size_t)n, f) != (size_t)n || fgetc(f) != EOF ||
-         fnv1a(0xcbf29ce484222325ULL, bin, (size_t)n) != sum)) {
-      free(bin);
-      bin = NULL;
-    }
-  }
-  fclose(f);
-  if (bin) *size = (size_t)n;
-  return bin;
-}
-
-/* Writes the program binary to a temporary file in the folder and renames it
- * over path; any failure leaves no file behind and is otherwise ignored. */
-static void cache_write(const char *dir, const char *path, uint64_t key, cl_program prog) {
-  size_t size = 0;
-  if (clGetProgramInfo(prog, CL_PROGRAM_BINARY_SIZES, sizeof size, &size, NULL) != CL_SUCCESS ||
-      size == 0 || size > LSM_CACHE_MAX_BYTES)
-    return;
-  unsigned char *bin = malloc(size);
-  if (!bin) return;
-  unsigned char *bins[1] = {bin};
-  if (clGetProgramInfo(prog, CL_PROGRAM_BINARIES, sizeof bins, bins, NULL) != CL_SUCCESS) {
-    free(bin);
-    return;
-  }
-  char tmp[4200];
-  int n = snprintf(tmp, sizeof tmp, "%s/.tmp-XXXXXX", dir);
-  int fd = n > 0 && (size_t)n < sizeof tmp ? mkstemp(tmp) : -1;
-  if (fd < 0) {
-    free(bin);
-    return;
-  }
-  FILE *f = fdopen(fd, "wb");
-  if (!f) {
-    close(fd);
-    unlink(tmp);
-    free(bin);
-    return;
-  }
-  unsigned char head[LSM_CACHE_HEAD];
-  const uint64_t n64 = size, sum = fnv1a(0xcbf29ce484222325ULL, bin, size);
-  memcpy(head, LSM_CACHE_MAGIC, 8);
-  memcpy(head + 8, &key, 8);
-  memcpy(head + 16, &n64, 8);
-  memcpy(head + 24, &sum, 8);
-  int ok = fwrite(head, 1, sizeof head, f) == sizeof head && fwrite(bin, 1, size, f) == size;
-  ok = (fclose(f) == 0) && ok;
-  if (!ok || rename(tmp, path) != 0) unlink(tmp);
-  free(bin);
-}
-
 /* ---- building the program ----------------------------------------------------------------- */
 
 /* clBuildProgram; on failure the message carries the (truncated) build log. */
@@ -487,45 +351,6 @@ static lsm_status program_from_source(cl_ctx *c, const char *options, lsm_err *e
     return cl_fail(err, c->name, "clCreateProgramWithSource", e);
   }
   return build_program(c, c->program, options, err);
-}
-
-/* The program from a cached binary; 0 (nothing kept) when that fails for any reason. */
-static int program_from_binary(cl_ctx *c, const unsigned char *bin, size_t size,
-                               const char *options) {
-  cl_int e, bin_status = CL_SUCCESS;
-  cl_program prog =
-      clCreateProgramWithBinary(c->context, 1, &c->device, &size, &bin, &bin_status, &e);
-  if (e != CL_SUCCESS || bin_status != CL_SUCCESS) {
-    if (e == CL_SUCCESS && prog) clReleaseProgram(prog);
-    return 0;
-  }
-  if (clBuildProgram(prog, 1, &c->device, options, NULL, NULL) != CL_SUCCESS) {
-    clReleaseProgram(prog);
-    return 0;
-  }
-  c->program = prog;
-  return 1;
-}
-
-/* Builds c->program from the cache or the source; sets *hit. */
-static lsm_status build(cl_ctx *c, const char *options, int *hit, lsm_err *err) {
-  *hit = 0;
-  char dir[4096], path[4200];
-  const int cache = cache_dir(dir, sizeof dir);
-  const uint64_t key = cache_key(c, options);
-  if (cache) {
-    snprintf(path, sizeof path, "%s/%016llx.clbin", dir, (unsigned long long)key);
-    size_t size = 0;
-    unsigned char *bin = cache_read(path, key, &size);
-    if (bin) {
-      *hit = program_from_binary(c, bin, size, options);
-      free(bin);
-      if (*hit) return LSM_OK;
-    }
-  }
-  LSM_TRY(program_from_source(c, options, err));
-  if (cache) cache_write(dir, path, key, c->program);
-  return LSM_OK;
 }
 
 /* ---- opening ------------------------------------------------------------------------------ */
@@ -665,10 +490,9 @@ lsm_status lsm_backend_cl_open(int device, lsm_backend *b, lsm_err *err) {
                                                         : "",
              c->cpu ? " -DLSM_CL_SERIAL_COMBINE" : "");
     const double t0 = now_seconds();
-    int hit = 0;
-    st = build(c, options, &hit, err);
+    st = program_from_source(c, options, err);
     b->build_seconds = now_seconds() - t0;
-    b->kernel_cache_hit = hit;
+    b->kernel_cache_hit = 0; /* no cache of our own: the driver's (PoCL's, NVIDIA's) serves */
   }
   if (st == LSM_OK) st = kernel_group_limit(c, err);
   if (st == LSM_OK) pick_local(c);

@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include "solver/app/lsm_cli.h"
+#include "solver/app/lsm_fill_cmd.h"
+#include "solver/app/lsm_label_score.h"
 #include "solver/app/lsm_mpi.h"
 #include "solver/app/lsm_reconstruct.h"
 #include "solver/app/lsm_score.h"
@@ -40,9 +42,39 @@ static int hold_standard_fds(void) {
   return 0;
 }
 
+/* `lsmorph fill` (and 3D Slicer's call of it): label volumes in and out. */
+static int run_fill(int argc, char **argv) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_signals_install(1);
+  const lsm_status st = lsm_fill_main(argc, argv, lsm_signals_flag(), &err);
+  const int sig = lsm_signals_caught();
+  if (st != LSM_OK && sig) {
+    fprintf(stderr, "lsmorph: error: interrupted by %s; no result was written\n",
+            lsm_signal_name(sig));
+    return lsm_signals_reraise(sig);
+  }
+  if (st == LSM_OK) return check_stdout(&err) == LSM_OK ? 0 : 1;
+  fprintf(stderr, "lsmorph: error: %s\n", err.msg[0] ? err.msg : lsm_status_name(st));
+  return st == LSM_ERR_USAGE ? 2 : 1;
+}
+
+/* `lsmorph score` of two label volumes. */
+static int run_label_score(int argc, char **argv) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_status st = lsm_label_score_main(argc, argv, &err);
+  if (st == LSM_OK) st = check_stdout(&err);
+  if (st == LSM_OK) return 0;
+  fprintf(stderr, "lsmorph: error: %s\n", err.msg[0] ? err.msg : lsm_status_name(st));
+  return st == LSM_ERR_USAGE ? 2 : 1;
+}
+
 /* Runs the command; returns the exit status (0 success, 1 failure, 2 usage
  * error), or ends the process by the stop signal that interrupted it. */
 static int run(int argc, char **argv, const lsm_mpi *mpi) {
+  if (lsm_fill_wanted(argc, argv)) return lsm_mpi_rank(mpi) == 0 ? run_fill(argc, argv) : 0;
+  if (lsm_label_score_wanted(argc, argv)) return lsm_mpi_rank(mpi) == 0 ? run_label_score(argc, argv) : 0;
   lsm_cli cli;
   lsm_err err;
   lsm_err_clear(&err);

@@ -97,6 +97,10 @@ static void edt_1d(const double *f, int n, double s2, double *out, int *v, doubl
   }
 }
 
+void lsm_edt_squared_1d(const double *f, int n, double spacing, double *out, int *v, double *z) {
+  edt_1d(f, n, spacing * spacing, out, v, z);
+}
+
 /* ------------------------------------------------------------------------ */
 /* 2D transform                                                              */
 

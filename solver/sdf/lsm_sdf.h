@@ -29,6 +29,12 @@
 lsm_status lsm_edt_squared(const uint8_t *feature, int width, int height, double dx,
                            double dy, double *out, lsm_err *err);
 
+/* The same along one line of n samples `spacing` apart: out[q] = min over p of
+ * (spacing (q - p))^2 + f[p] (f +INFINITY where there is no feature; out
+ * +INFINITY when there is none at all).  Scratch: v holds n ints, z n + 1
+ * doubles.  (A 3D transform is the 2D one per slice, then this across them.) */
+void lsm_edt_squared_1d(const double *f, int n, double spacing, double *out, int *v, double *z);
+
 /* Fills the inside of outline contours by parity: out->pixels = 1 for pixels
  * enclosed by an odd number of contours and for contour pixels themselves
  * (so a filled disc includes its outline).  The background is found with

@@ -1,0 +1,110 @@
+#!/bin/sh
+# lsmorph fill end to end: a multi-label volume (two touching ellipsoids, an
+# oblique tube, a label nested in another, a label on one drawn slice; an
+# oblique affine, voxels 0.9 x 0.8 x 2 mm) drawn on every 4th slice, filled as
+# NIfTI-1 .nii.gz, NIfTI-2 .nii, NRRD raw, .seg.nrrd gzip with 3D Slicer's
+# segment key/value pairs, and .nhdr with a detached data file; OUT read back
+# by nibabel and VTK's vtkNrrdReader with the input's geometry; drawn slices
+# exact, labels kept; --labels, --slices on the full volume, --threads, the
+# other axes; then every error case.  Needs nibabel and VTK (python3-nibabel,
+# python3-vtk9).
+#   sh tests/test_fill.sh BUILD_DIR
+# Prints "fill: N passed, N failed".
+set -u
+BUILD=${1:-build}
+LSM="$BUILD/lsmorph"
+PY=/usr/bin/python3
+SUITE=fill
+. "$(dirname "$0")/harness.sh"
+need "$LSM"
+need_python "nibabel, numpy, vtk" "python3-nibabel, python3-numpy, python3-vtk9"
+make_tmp
+case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
+HERE="$(cd "$(dirname "$0")" && pwd)"
+
+# The volumes: $TMP/truth.nii.gz (every slice) and the drawn ones in every format
+"$PY" "$HERE/fill_check.py" make "$TMP" >"$TMP/make.log" 2>&1 || { bad "making the volumes: $(tail -3 "$TMP/make.log")"; finish; }
+
+# fill IN OUT [OPTIONS]: runs lsmorph fill, checks exit 0
+fill() {
+  in=$1 out=$2
+  shift 2
+  "$LSM" fill "$TMP/$in" -o "$TMP/$out" "$@" >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "fill $in -> $out $*: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+}
+
+for f in drawn.nii.gz drawn2.nii drawn.nrrd drawn.seg.nrrd drawn.nhdr; do
+  out="out-$f"
+  fill "$f" "$out"
+  run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" verify "$TMP" "$f" "$out"
+done
+check "the note lists the drawn slices" grep -q "taken as drawn: the 9 slices holding labels (4, 8, ..., 36 (every 4th)), and 0 and 40" "$TMP/e"
+check "no temporary file left" [ -z "$(ls -A "$TMP" | grep '\.tmp-')" ]
+# NIfTI in, NRRD out and back: the geometry converted
+fill drawn.nii.gz cross.seg.nrrd
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" verify "$TMP" drawn.nii.gz cross.seg.nrrd
+
+# the same result for any thread count, and for the full volume with the same slices
+fill drawn.nii.gz t1.nii.gz --threads 1
+fill drawn.nii.gz t3.nii.gz --threads 3
+fill truth.nii.gz given.nii.gz --slices 0:40:4
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" same "$TMP" out-drawn.nii.gz t1.nii.gz t3.nii.gz given.nii.gz
+# --labels 2,3: the others as drawn
+fill drawn.nii.gz some.nii.gz --labels 2,3
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" labels "$TMP" drawn.nii.gz some.nii.gz out-drawn.nii.gz 2,3
+# across another axis: the tube drawn every 3rd slice across i
+fill drawn-i.nii.gz out-i.nii.gz --axis i
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" verify "$TMP" drawn-i.nii.gz out-i.nii.gz
+# options of reconstruct, in both spellings (3D Slicer's flags take '_')
+fill drawn.nii.gz blend.nii.gz --method blend --interp linear --max_iter 500 -q
+check "-q: nothing on stderr" [ ! -s "$TMP/e" ]
+
+# score of two label volumes: the slices from the record in OUT's header, against numpy
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/out-drawn.nii.gz" >"$TMP/score.json" 2>"$TMP/e"
+rc=$?
+check "score: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" score "$TMP" truth.nii.gz out-drawn.nii.gz score.json
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/truth.nii.gz" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "score without a record: exit 2 (got $rc)" [ $rc -eq 2 ]
+check "score without a record: asks for --slices" grep -q "give --slices LIST and --axis" "$TMP/e"
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/truth.nii.gz" --slices 0:40:4 --axis k >"$TMP/o" 2>"$TMP/e"
+check "score of the truth against itself: Dice 1" grep -q '"mean": {"dice": 1,' "$TMP/o"
+"$LSM" score "$TMP/truth.nii.gz" "$TMP/out-i.nii.gz" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "score of volumes of other sizes: exit 1 (got $rc)" [ $rc -eq 1 ]
+
+# ---- errors: exit 1 (2 for usage), a message, no output, before any work -------------------
+expect() { # expect RC PHRASE ARGS...
+  want=$1 phrase=$2
+  shift 2
+  "$LSM" fill "$@" >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "fill $*: exit $want (got $rc)" [ $rc -eq "$want" ]
+  check "fill $*: says '$phrase' (said: $(head -c 300 "$TMP/e"))" grep -q -F -e "$phrase" "$TMP/e"
+  check "fill $*: no output" [ ! -e "$TMP/none.nii" ] && [ ! -e "$TMP/none.nrrd" ]
+}
+expect 1 "not a label map: voxel" "$TMP/half.nii" -o "$TMP/none.nii"
+expect 1 "export the segmentation as a labelmap" "$TMP/layers.seg.nrrd" -o "$TMP/none.nrrd"
+expect 1 "only slice 20 holds labels" "$TMP/one.nii.gz" -o "$TMP/none.nii"
+expect 1 "no such folder" "$TMP/drawn.nii.gz" -o "$TMP/missing/none.nii"
+expect 1 "is the input file" "$TMP/drawn.nii.gz" -o "$TMP/drawn.nii.gz"
+expect 1 "cannot read" "$TMP/absent.nii" -o "$TMP/none.nii"
+expect 1 "is a folder" "$TMP" -o "$TMP/none.nii"
+expect 1 "--labels: 9 is not in the volume" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --labels 9
+expect 2 "--slices: 99 is past the last slice" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --slices 0,99
+expect 2 "--dz does not apply to fill" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --dz 1
+expect 2 "unknown option '--bogus'" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --bogus
+expect 2 "--method: 'x' is not one of" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --method x
+expect 2 "--axis: 'q' is not one of i, j, k, auto" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --axis q
+expect 2 "end it in .nii" "$TMP/drawn.nii.gz" -o "$TMP/none.png"
+expect 2 "fill: missing -o OUT" "$TMP/drawn.nii.gz"
+check "the missing folder was not made" [ ! -e "$TMP/missing" ]
+# every slice drawn: a note, the volume copied
+"$LSM" fill "$TMP/truth.nii.gz" -o "$TMP/copy.nii.gz" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "every slice drawn: exit 0 (got $rc)" [ $rc -eq 0 ]
+check "every slice drawn: says nothing to fill" grep -q "nothing to fill" "$TMP/e"
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" same "$TMP" truth.nii.gz copy.nii.gz
+finish
