@@ -324,7 +324,9 @@ static void draw_cells(lsm_render *r, const lsm_render_volume *v, int k0, int k1
   cell c;
   for (int k = k0; k < k1 && k < cells[2]; ++k) {
     const int k1p = k + 1 < v->n[2] ? k + 1 : k;
-    for (int j = 0; j < cells[1]; ++j) {
+    /* within a plane, nearer cells first, so that farther ones fail the depth test */
+    for (int jj = 0; jj < cells[1]; ++jj) {
+      const int j = r->d[1] < 0 ? cells[1] - 1 - jj : jj;
       const int j1 = j + 1 < v->n[1] ? j + 1 : j;
       const float *row[4] = {v->vol + (size_t)k * nxy + (size_t)j * nx, v->vol + (size_t)k * nxy + (size_t)j1 * nx,
                              v->vol + (size_t)k1p * nxy + (size_t)j * nx, v->vol + (size_t)k1p * nxy + (size_t)j1 * nx};
@@ -335,7 +337,8 @@ static void draw_cells(lsm_render *r, const lsm_render_volume *v, int k0, int k1
         any |= sum[i];
       }
       if (!any) continue; /* no cell of this row holds an inside sample */
-      for (int i = 0; i < cells[0]; ++i) {
+      for (int ii = 0; ii < cells[0]; ++ii) {
+        const int i = r->d[0] < 0 ? cells[0] - 1 - ii : ii;
         const int i1 = i + 1 < v->n[0] ? i + 1 : i;
         const int inside = sum[i] + sum[i1];
         if (inside == 0) continue;
