@@ -135,7 +135,8 @@ static FILE *scratch_open(const char *dir) {
 /* Forgets the vertices made before the slab below the one starting now. */
 static void window_advance(lsm_mesh *m) {
   const size_t drop = m->slab_start - m->win_base;
-  memmove(m->win, m->win + drop * 6, (m->win_n - drop) * 6 * sizeof(float));
+  if (drop > 0 && m->win_n > drop) /* (no window yet: nothing to move) */
+    memmove(m->win, m->win + drop * 6, (m->win_n - drop) * 6 * sizeof(float));
   m->win_n -= drop;
   m->win_base = m->slab_start;
   m->slab_start = m->nv;
