@@ -113,9 +113,9 @@ $(KERNEL_GEN): kernels/morph.cl kernels/lsm_cell.h kernels/lsm_stencil.h kernels
 	         print "#line " (NR + 1) " \"morph.cl\""; next } { print }' kernels/morph.cl \
 	    | od -An -v -tx1 | sed 's/^ *//; s/ *$$//; s/  */,0x/g; s/^/0x/; s/$$/,/'; \
 	  echo '0x00};'; } > $@.tmp && mv $@.tmp $@
-$(BUILD)/obj/kernels/opencl/lsm_backend_cl.o $(BUILD)/fuzz/obj/kernels/opencl/lsm_backend_cl.o: $(KERNEL_GEN)
-$(BUILD)/obj/kernels/opencl/lsm_backend_cl.o: CFLAGS += -I$(BUILD)/gen
-$(BUILD)/fuzz/obj/kernels/opencl/lsm_backend_cl.o: FUZZ_CFLAGS += -I$(BUILD)/gen
+$(BUILD)/obj/kernels/opencl/lsm_cl_context.o $(BUILD)/fuzz/obj/kernels/opencl/lsm_cl_context.o: $(KERNEL_GEN)
+$(BUILD)/obj/kernels/opencl/lsm_cl_context.o: CFLAGS += -I$(BUILD)/gen
+$(BUILD)/fuzz/obj/kernels/opencl/lsm_cl_context.o: FUZZ_CFLAGS += -I$(BUILD)/gen
 
 $(BUILD)/liblsmorph.a: $(LIB_OBJ)
 	@rm -f $@

@@ -28,17 +28,7 @@
 
 /* ---- names --------------------------------------------------------------------------- */
 
-static const char *const values_names[LSM_VALUES_COUNT] = {"sdf", "mask"};
-
-const char *lsm_values_name(lsm_values v) {
-  return v > LSM_VALUES_UNKNOWN && v < LSM_VALUES_COUNT ? values_names[v] : "unknown";
-}
-
-lsm_values lsm_values_from_name(const char *name) {
-  for (int k = 0; k < LSM_VALUES_COUNT; ++k)
-    if (name && strcmp(name, values_names[k]) == 0) return (lsm_values)k;
-  return LSM_VALUES_UNKNOWN;
-}
+LSM_NAME_FUNCTIONS(lsm_values, LSM_VALUES_LIST, lsm_values_name, lsm_values_from_name)
 
 typedef struct format_entry {
   unsigned bit;

@@ -24,6 +24,7 @@
 #include <stdio.h>
 
 #include "solver/base/lsm_grid.h"
+#include "solver/base/lsm_names.h"
 #include "solver/base/lsm_status.h"
 
 /* ---- PNG ---------------------------------------------------------------- */
@@ -229,15 +230,11 @@ lsm_status lsm_read_file(const char *path, size_t max_bytes, char **data, size_t
 /* What the volume holds: the signed distance (float32, physical units,
  * negative inside) or a mask (uint8, 255 where phi <= 0, else 0; in EXR
  * files a half-float 1.0 / 0.0). */
-typedef enum lsm_values {
-  LSM_VALUES_UNKNOWN = -1,
-  LSM_VALUES_SDF,
-  LSM_VALUES_MASK,
-  LSM_VALUES_COUNT
-} lsm_values;
+#define LSM_VALUES_LIST(X)                                                      \
+  X(LSM_VALUES_SDF, "sdf")   /* float32 signed distance */                      \
+  X(LSM_VALUES_MASK, "mask") /* uint8 255 inside, 0 outside */
+LSM_ENUM(lsm_values, LSM_VALUES, LSM_VALUES_LIST, lsm_values_name, lsm_values_from_name);
 
-const char *lsm_values_name(lsm_values v);
-lsm_values lsm_values_from_name(const char *name);
 /* Name of one format bit ("nrrd"), or "unknown". */
 const char *lsm_format_name(unsigned format);
 /* Parses a comma-separated list ("nrrd,mha,vtk,exr,raw,nii,nii.gz", any order, repeats

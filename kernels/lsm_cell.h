@@ -1,18 +1,14 @@
 /* lsm_cell.h — per-cell numerics of lsmorph, written once.
  *
  * Pure functions of plain values: no memory access patterns, no I/O, no
- * globals.  The scalar C path (solver/pde/lsm_scheme.c, solver/pde/lsm_reinit.c) and
- * the OpenCL kernels (kernels/ *.cl files) both include this file, so both run the
- * same arithmetic.  All quantities are float; lengths in physical units.
+ * globals.  The C backend and the OpenCL kernels both include this file
+ * (through kernels/lsm_stencil.h), so both run the same arithmetic.  Floats
+ * throughout; lengths in physical units.  The derivations: solver/README.md.
  *
- * Notation (Osher & Fedkiw 2003, ch. 3–5):
- *   dxm = (phi[i] - phi[i-1]) / dx   backward difference  (phi_x^-)
- *   dxp = (phi[i+1] - phi[i]) / dx   forward difference   (phi_x^+)
- *   dym, dyp likewise along y.
- * The morph equation (Nilsson, Breen & Museth 2005; METHOD.md §2) is
- *   phi_t + F |grad phi| = 0,   F = phi - phi_target,
- * with Hamiltonian H(p, q) = F sqrt(p^2 + q^2),
- *   H1 = dH/dp = F p / |(p, q)|,   H2 = dH/dq = F q / |(p, q)|.
+ * Notation: dxm = (phi[i] - phi[i-1]) / dx, dxp = (phi[i+1] - phi[i]) / dx
+ * (backward and forward differences), dym, dyp along y.  The morph equation
+ * phi_t + F |grad phi| = 0, F = phi - phi_target, has the Hamiltonian
+ * H(p, q) = F sqrt(p^2 + q^2), H1 = F p / |(p, q)|, H2 = F q / |(p, q)|.
  */
 #ifndef LSM_CELL_H
 #define LSM_CELL_H
@@ -44,26 +40,20 @@ LSM_FN float lsm_minf(float a, float b) { return a < b ? a : b; }
 /* One strictly positive and the other strictly negative. */
 LSM_FN int lsm_opposite(float a, float b) { return (a > 0.0f && b < 0.0f) || (a < 0.0f && b > 0.0f); }
 
-/* ---- First-order Godunov upwind (Rouy & Tourin 1992; Osher & Fedkiw ch. 6) -----
- * Numerical Hamiltonian for F |grad phi| with the speed F known at the cell,
- * per axis the larger of the two upwind one-sided slopes:
+/* ---- Godunov upwind (Rouy & Tourin; solver/README.md §4) -------------------------
+ * F |grad phi| with, per axis, the larger of the two upwind one-sided slopes:
  *   F > 0: |grad phi|^2 ~ max(max(dxm,0)^2, min(dxp,0)^2) + (the same in y)
  *   F < 0: |grad phi|^2 ~ max(min(dxm,0)^2, max(dxp,0)^2) + (the same in y)
- * (Osher & Sethian's 1988 form adds the two squares instead; at a peak or
- * ridge of phi that moves it up to sqrt 2 faster in each axis, and under the
- * CFL step below (cfl 0.75) a one-cell peak then overshoots below all its
- * neighbours: not monotone.  With the max, each cell's update is a convex
- * combination of its old value and its upwind neighbours for cfl <= 1: phi
- * never leaves the range of its previous values, as the PDE's solution.) */
+ * The max (not Osher & Sethian's sum) keeps the update a convex combination
+ * of upwind values under the CFL step: monotone. */
 LSM_FN float lsm_upwind_hamiltonian(float F, float dxm, float dxp, float dym, float dyp) {
   float ax = lsm_maxf(dxm, 0.0f), bx = lsm_minf(dxp, 0.0f);
   float ay = lsm_maxf(dym, 0.0f), by = lsm_minf(dyp, 0.0f);
   float cx = lsm_minf(dxm, 0.0f), ex = lsm_maxf(dxp, 0.0f);
   float cy = lsm_minf(dym, 0.0f), ey = lsm_maxf(dyp, 0.0f);
-  /* max(u, v) = -min(-u, -v) exactly.  The y terms are written that way only
-   * so that they do not mirror the x terms: alike, LLVM's SLP vectoriser packs
-   * the two axes into 2-wide vectors, and PoCL's work-group vectoriser then
-   * leaves the whole kernel scalar (the upwind stage 5x slower on PoCL). */
+  /* max(u, v) = -min(-u, -v) exactly; the y terms are written so only that
+   * they do not mirror the x terms, which LLVM would pack into 2-wide vectors,
+   * leaving PoCL's work-group vectoriser the kernel scalar. */
   float grad2_pos = lsm_maxf(ax * ax, bx * bx) - lsm_minf(-(ay * ay), -(by * by));
   float grad2_neg = lsm_maxf(cx * cx, ex * ex) - lsm_minf(-(cy * cy), -(ey * ey));
   /* One square root of the chosen side (the same value as choosing between
@@ -71,20 +61,11 @@ LSM_FN float lsm_upwind_hamiltonian(float F, float dxm, float dxp, float dym, fl
   return F * LSM_SQRT(F > 0.0f ? grad2_pos : grad2_neg);
 }
 
-/* ---- CFL rate (METHOD.md §3.4) --------------------------------------------------
- * Upwind: max over the four one-sided combinations (p in {dxm,dxp}, q in
- * {dym,dyp}) of
- *   |H1|/dx + |H2|/dy = |F| (|p|/dx + |q|/dy) / |(p,q)|.
- * The step is dt = cfl / max over the grid of the rate.  For the Godunov
- * upwind above it is the monotone bound for cfl <= 1: the update's weight on a
- * cell's own value is 1 - dt |F| (|p|/dx + |q|/dy) / |(p,q)| for the pair it
- * takes.
- * Roe-Fix: its Lax–Friedrichs branches weigh a cell's own value by up to
- * dt (alpha_x/dx + alpha_y/dy), each alpha a max of |H1| or |H2| over widened
- * sets, up to |F|; so its rate is |F| (1/dx + 1/dy), the largest |H1|/dx and
- * |H2|/dy taken apart (Osher & Fedkiw's form of the condition), never below
- * the pairwise rate.  With the pairwise rate (the document's reading of §3.4)
- * Roe-Fix grew without bound above about cfl 0.8 on 1-px stripes. */
+/* ---- CFL rate (solver/README.md §4): dt = cfl / max over the grid -----------------
+ * Upwind: the largest over the four one-sided pairs (p in {dxm,dxp}, q in
+ * {dym,dyp}) of |H1|/dx + |H2|/dy = |F| (|p|/dx + |q|/dy) / |(p,q)|, the
+ * monotone bound of the update above for cfl <= 1.  Roe-Fix: |F| (1/dx +
+ * 1/dy), which bounds its Lax–Friedrichs dissipation. */
 LSM_FN float lsm_cfl_pair(float p, float q, float inv_dx, float inv_dy) {
   float g = LSM_SQRT(p * p + q * q);
   return g > 0.0f ? (LSM_FABS(p) * inv_dx + LSM_FABS(q) * inv_dy) / g : 0.0f;
@@ -98,31 +79,26 @@ LSM_FN float lsm_cfl_rate(float F, float dxm, float dxp, float dym, float dyp, f
   return LSM_FABS(F) * r;
 }
 
-/* The rate of a scheme: roefix 0 (upwind) or 1 (Roe-Fix).  A cell where phi
- * is flat (all four differences 0: an empty slice's constant far value) has
- * no Hamiltonian and no dissipation, rate 0, however large F is there.  Only
- * all four: the step is fixed from phi_0, and a phi flat along one axis only
- * (1-px stripes) is not flat a few steps later. */
+/* The rate of a scheme: roefix 0 (upwind) or 1 (Roe-Fix).  A cell flat in all
+ * four differences (an empty slice's constant value) moves nothing: rate 0,
+ * however large F is there; flat along one axis only is not enough, since it
+ * does not stay flat. */
 LSM_FN float lsm_cfl_rate_of(int roefix, float F, float dxm, float dxp, float dym, float dyp,
                              float inv_dx, float inv_dy) {
   const int flat = dxm == 0.0f && dxp == 0.0f && dym == 0.0f && dyp == 0.0f;
   if (!roefix) {
     const float rate = lsm_cfl_rate(F, dxm, dxp, dym, dyp, inv_dx, inv_dy);
     if (inv_dx == inv_dy || flat) return rate;
-    /* Unequal spacing: the pairwise rate read from phi_0's gradient can grow
-     * by up to max(dx, dy) / min(dx, dy) once the front turns (a band along
-     * the coarse axis morphing into a disc blew up at dx = 1, dy = 4); the
-     * step is fixed from phi_0, so take the largest over all directions,
-     * |F| sqrt(1/dx^2 + 1/dy^2), written so that no square overflows.
-     * Square pixels keep the pairwise rate (at most sqrt 2 below that bound,
-     * measured stable at the default cfl). */
+    /* Unequal spacing: the pairwise rate can grow by up to max(dx,dy)/min(dx,dy)
+     * once the front turns, and the step is fixed from phi_0: the bound over
+     * all directions, |F| sqrt(1/dx^2 + 1/dy^2), written so no square overflows. */
     const float a = lsm_maxf(inv_dx, inv_dy), t = lsm_minf(inv_dx, inv_dy) / a;
     return lsm_maxf(rate, LSM_FABS(F) * a * LSM_SQRT(1.0f + t * t));
   }
   return flat ? 0.0f : LSM_FABS(F) * (inv_dx + inv_dy);
 }
 
-/* ---- Roe-Fix (Osher & Fedkiw ch. 5.3; the design document's Algorithm 3.1) -------
+/* ---- Roe-Fix (Osher & Fedkiw ch. 5.3; solver/README.md §4) -------------------------
  * Inputs are the one-sided differences on a +-3 cell stencil:
  *   xm[k] = phi_x^- at column i-3+k, xp[k] = phi_x^+ at column i-3+k (k = 0..6),
  *   ym[k], yp[k] likewise along the column; index 3 is the cell itself.
@@ -222,26 +198,13 @@ LSM_FN float lsm_roefix_hamiltonian(float F, const LSM_PRIV float *xm, const LSM
   return lsm_roefix_hamiltonian_ex(F, xm, xp, ym, yp, &branch);
 }
 
-/* ---- Fifth-order HJ-WENO (Jiang & Peng 2000; Osher & Fedkiw 2003, §3.4) ----------
- * The one-sided derivative phi_x^- at cell i from the five backward
- * differences v1..v5 = D^- phi at i-2 .. i+2; phi_x^+ from the forward
- * differences D^+ phi at i+2 .. i-2, in that order.  Three third-order
- * candidates
- *   p1 = (2 v1 - 7 v2 + 11 v3) / 6,  p2 = (-v2 + 5 v3 + 2 v4) / 6,
- *   p3 = (2 v3 + 5 v4 - v5) / 6
- * are weighted by alpha_k = d_k / (eps + S_k)^2, d = (1, 6, 3) (the ideal
- * weights 1/10, 6/10, 3/10: fifth order where phi is smooth), with the
- * smoothness indicators 12 times Jiang & Peng's,
- *   S1 = 13 (v1 - 2 v2 + v3)^2 + 3 (v1 - 4 v2 + 3 v3)^2
- *   S2 = 13 (v2 - 2 v3 + v4)^2 + 3 (v2 - v4)^2
- *   S3 = 13 (v3 - 2 v4 + v5)^2 + 3 (3 v3 - 4 v4 + v5)^2,
- * near a kink (the medial axis of a distance, a corner) the smooth side's
- * candidate takes over.  The indicators are taken of v / max |v_k|, and eps =
- * 12e-6 (Osher & Fedkiw's 1e-6 max v_k^2): the weights do not depend on the
- * scale of phi, and nothing overflows or underflows in float however large or
- * small the differences.  All-zero differences
- * give 0.  Every candidate is exact for a quadratic phi, so the weights only
- * matter where phi is not one. */
+/* ---- Fifth-order HJ-WENO (Jiang & Peng 2000; solver/README.md §4) -------------------
+ * The one-sided derivative phi_x^- at cell i from the backward differences
+ * v1..v5 = D^- phi at i-2 .. i+2 (phi_x^+: the forward ones at i+2 .. i-2):
+ * three third-order candidates weighted by their smoothness, the ideal weights
+ * 1/10, 6/10, 3/10 where phi is smooth.  The indicators are taken of
+ * v / max |v_k| with eps = 12e-6, so the weights do not depend on the scale of
+ * phi and nothing overflows in float; all-zero differences give 0. */
 LSM_FN float lsm_weno5(float v1, float v2, float v3, float v4, float v5) {
   float a = lsm_maxf(lsm_maxf(lsm_maxf(LSM_FABS(v1), LSM_FABS(v2)),
                                     lsm_maxf(LSM_FABS(v3), LSM_FABS(v4))),
@@ -266,12 +229,9 @@ LSM_FN float lsm_weno5(float v1, float v2, float v3, float v4, float v5) {
 }
 
 /* The WENO5 Hamiltonian of a cell from the seven values of its row and of its
- * column centred on it (row[3] = col[3] = phi at the cell; ghosts 3 deep):
- * differences formed as the first-order scheme forms them, the WENO one-sided
- * derivatives, and the Godunov Hamiltonian of lsm_upwind_hamiltonian on them
- * (Osher & Fedkiw eq. 6.3 with high-order derivatives, as in LSMLIB and
- * OpenVDB's HJWENO5 schemes).  Not monotone: phi may leave the range of its
- * neighbours by the small oscillations WENO allows. */
+ * column centred on it (row[3] = col[3] = phi at the cell): the Godunov
+ * Hamiltonian of lsm_upwind_hamiltonian on the WENO one-sided derivatives (as
+ * LSMLIB's and OpenVDB's HJWENO5).  Not monotone. */
 LSM_FN float lsm_weno5_hamiltonian(float F, const LSM_PRIV float *row, const LSM_PRIV float *col,
                                    float inv_dx, float inv_dy) {
   float dx[6], dy[6];
@@ -285,7 +245,7 @@ LSM_FN float lsm_weno5_hamiltonian(float F, const LSM_PRIV float *row, const LSM
                                 lsm_weno5(dy[5], dy[4], dy[3], dy[2], dy[1]));
 }
 
-/* ---- Reinitialisation (Russo & Smereka 2000) -------------------------------------
+/* ---- Reinitialisation (Russo & Smereka 2000; solver/README.md §10) -----------------
  * phi_tau + S(phi0) (|grad phi| - 1) = 0 with the subcell fix: cells whose sign
  * differs from a 4-neighbour's in phi0 keep the interface where phi0 put it. */
 
@@ -306,6 +266,10 @@ LSM_FN float lsm_godunov_grad(float s, float dxm, float dxp, float dym, float dy
   return LSM_SQRT(gx + gy);
 }
 
+/* The pseudo-time step: dtau = h / 2, h = min(dx, dy). */
+LSM_FN float lsm_reinit_h(float dx, float dy) { return dx < dy ? dx : dy; }
+LSM_FN float lsm_reinit_dtau(float h) { return 0.5f * h; }
+
 /* One explicit pseudo-time step of size dtau for a cell.
  *   phi, phi0           the cell's current and initial values
  *   l0, r0, d0, u0      phi0 at the 4 neighbours (x-1, x+1, y-1, y+1)
@@ -316,8 +280,7 @@ LSM_FN float lsm_godunov_grad(float s, float dxm, float dxp, float dym, float dy
 LSM_FN float lsm_reinit_cell(float phi, float phi0, float l0, float r0, float d0, float u0,
                              float dxm, float dxp, float dym, float dyp, float inv_dx,
                              float inv_dy, float h, float dtau) {
-  /* signs compared, not multiplied: phi0 * l0 underflows to 0 at pixel sizes
-   * below about 1e-22, and no cell was an interface cell there */
+  /* signs compared, not multiplied: the product underflows at tiny pixel sizes */
   int interface = lsm_opposite(phi0, l0) | lsm_opposite(phi0, r0) | lsm_opposite(phi0, d0) |
                   lsm_opposite(phi0, u0) | (phi0 == 0.0f);
   float s = phi0 > 0.0f ? 1.0f : (phi0 < 0.0f ? -1.0f : 0.0f);

@@ -1,10 +1,8 @@
 /* lsm_particle_cell.h — per-particle numerics of the particle level set, written once.
  *
- * Pure functions of plain values, in the style of kernels/lsm_cell.h: no
- * memory access patterns, no I/O, no globals.  The scalar C path
- * (solver/pde/lsm_particles.c) and the OpenCL kernels (kernels/morph.cl, which
- * the build splices this file into) both include it and call the same
- * functions, so both run the same arithmetic.
+ * Pure functions of plain values, in the style of kernels/lsm_cell.h.  The C
+ * path (solver/pde/lsm_particles.c) and the OpenCL kernels (kernels/morph.cl)
+ * both include it, so both run the same arithmetic.
  *
  * Units.  Particle positions are in CELL coordinates: x = column, y = row,
  * continuous, with cell centres (grid nodes) at integers.  phi, radii, band
@@ -12,8 +10,8 @@
  * A "grid cell" here is the square between the 4 nodes (i,j), (i+1,j),
  * (i,j+1), (i+1,j+1) (Figure 3.18 of the design document).
  *
- * References: design document §3.3.13 (METHOD.md §4), Algorithms 3.2 and 3.3,
- * Eq. 3.15–3.26; Enright, Fedkiw, Ferziger & Mitchell (2002).
+ * The method: solver/README.md §11 (the design document's Algorithms 3.2 and
+ * 3.3, Eq. 3.15–3.26; Enright, Fedkiw, Ferziger & Mitchell 2002).
  */
 #ifndef LSM_PARTICLE_CELL_H
 #define LSM_PARTICLE_CELL_H
@@ -186,8 +184,8 @@ LSM_FN float lsm_pcl_select(float phi_plus, float phi_minus) {
 
 /* ---- Set constants, the node field, stages, strays -----------------------------------
  * Called by solver/pde/lsm_particles.c (inside its vectorised loops) and by the
- * OpenCL path (kernels/morph.cl, kernels/opencl/lsm_backend_cl.c); each comment names
- * the C function that uses it. */
+ * OpenCL path (kernels/morph.cl, kernels/opencl/lsm_cl_particles.c); each
+ * comment names the C function that uses it. */
 
 /* Constants of a particle set on a dx x dy grid, as lsm_pls_create sets them:
  * r_min = 0.1 min(dx,dy), r_max = 0.5 min(dx,dy); and the stray distance of

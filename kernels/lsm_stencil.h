@@ -12,6 +12,22 @@
 
 #include "kernels/lsm_cell.h"
 
+/* A Shu–Osher stage's value at a cell of value c and Hamiltonian H:
+ * c0 u0 + c1 (c - dt H). */
+LSM_FN float lsm_stage_value(float c0, float u0, float c1, float c, float dt, float H) {
+  return c0 * u0 + c1 * (c - dt * H);
+}
+
+/* The 2 reach + 1 values of the row and of the column through the cell (reach <= 4). */
+LSM_FN void lsm_cross_at(LSM_GLOBAL const float *in, LSM_IDX k, LSM_IDX s, int reach,
+                         LSM_PRIV float *row, LSM_PRIV float *col) {
+  LSM_UNROLL
+  for (int d = 0; d <= 2 * reach; ++d) {
+    row[d] = in[k + (d - reach)];
+    col[d] = in[k + (d - reach) * s];
+  }
+}
+
 /* One Shu–Osher stage at a cell, out = c0 u0 + c1 (in - dt Hhat(in)), with the
  * Godunov upwind Hamiltonian on the four one-sided differences. */
 LSM_FN float lsm_stage_upwind_at(LSM_GLOBAL const float *u0, LSM_GLOBAL const float *in,
@@ -21,21 +37,16 @@ LSM_FN float lsm_stage_upwind_at(LSM_GLOBAL const float *u0, LSM_GLOBAL const fl
   const float H = lsm_upwind_hamiltonian(c - target[k], (c - in[k - 1]) * inv_dx,
                                          (in[k + 1] - c) * inv_dx, (c - in[k - s]) * inv_dy,
                                          (in[k + s] - c) * inv_dy);
-  return c0 * u0[k] + c1 * (c - dt * H);
+  return lsm_stage_value(c0, u0[k], c1, c, dt, H);
 }
 
-/* The same with Roe-Fix: the 9-cell row and column through the cell, loaded
- * once, give the one-sided differences of the +-3 widened sets. */
+/* The same with Roe-Fix: the 9-cell row and column through the cell give the
+ * one-sided differences of the +-3 widened sets. */
 LSM_FN float lsm_stage_roefix_at(LSM_GLOBAL const float *u0, LSM_GLOBAL const float *in,
                                  LSM_GLOBAL const float *target, LSM_IDX k, LSM_IDX s,
                                  float inv_dx, float inv_dy, float c0, float c1, float dt) {
-  float row[9], col[9];
-  LSM_UNROLL
-  for (int d = 0; d < 9; ++d) {
-    row[d] = in[k + (d - 4)];
-    col[d] = in[k + (d - 4) * s];
-  }
-  float xm[7], xp[7], ym[7], yp[7];
+  float row[9], col[9], xm[7], xp[7], ym[7], yp[7];
+  lsm_cross_at(in, k, s, 4, row, col);
   LSM_UNROLL
   for (int q = 0; q < 7; ++q) {
     xm[q] = (row[q + 1] - row[q]) * inv_dx;
@@ -43,9 +54,8 @@ LSM_FN float lsm_stage_roefix_at(LSM_GLOBAL const float *u0, LSM_GLOBAL const fl
     ym[q] = (col[q + 1] - col[q]) * inv_dy;
     yp[q] = (col[q + 2] - col[q + 1]) * inv_dy;
   }
-  const float c = row[4];
-  const float H = lsm_roefix_hamiltonian(c - target[k], xm, xp, ym, yp);
-  return c0 * u0[k] + c1 * (c - dt * H);
+  const float H = lsm_roefix_hamiltonian(row[4] - target[k], xm, xp, ym, yp);
+  return lsm_stage_value(c0, u0[k], c1, row[4], dt, H);
 }
 
 /* The same with WENO5 derivatives: the 7-cell row and column through the cell. */
@@ -53,14 +63,9 @@ LSM_FN float lsm_stage_weno5_at(LSM_GLOBAL const float *u0, LSM_GLOBAL const flo
                                 LSM_GLOBAL const float *target, LSM_IDX k, LSM_IDX s,
                                 float inv_dx, float inv_dy, float c0, float c1, float dt) {
   float row[7], col[7];
-  LSM_UNROLL
-  for (int d = 0; d < 7; ++d) {
-    row[d] = in[k + (d - 3)];
-    col[d] = in[k + (d - 3) * s];
-  }
-  const float c = row[3];
-  const float H = lsm_weno5_hamiltonian(c - target[k], row, col, inv_dx, inv_dy);
-  return c0 * u0[k] + c1 * (c - dt * H);
+  lsm_cross_at(in, k, s, 3, row, col);
+  const float H = lsm_weno5_hamiltonian(row[3] - target[k], row, col, inv_dx, inv_dy);
+  return lsm_stage_value(c0, u0[k], c1, row[3], dt, H);
 }
 
 /* The CFL rate of a cell (lsm_cfl_rate_of; roefix 0 or 1). */

@@ -1,7 +1,7 @@
-/* morph.cl — the OpenCL kernels of lsmorph (host code: kernels/opencl/lsm_backend_cl.c).
+/* morph.cl — the OpenCL kernels of lsmorph (host code: kernels/opencl/).
  *
- * One job per kernel, composed by the host in the same order as the C path
- * (solver/pde/lsm_scheme.c, solver/pde/lsm_reinit.c):
+ * One job per kernel; each backend op enqueues the kernels that do it, in the
+ * order the driver (solver/pde/lsm_fields.c) calls the ops on both backends:
  *   lsm_fill_ghosts    zero-gradient extension into the ghost ring
  *   lsm_stage_upwind   out = c0 u0 + c1 (in - dt Hhat(in)), Godunov upwind
  *   lsm_stage_roefix   the same with the Roe-Fix Hamiltonian (+-3 widened sets)
@@ -16,10 +16,11 @@
  *                      strays, phi_plus / phi_minus at escaped particles' corners
  *   lsm_pcl_apply      Eq. 3.26 at the touched corners (lsm_pls_correct)
  *   lsm_pcl_adjust_radius  the radius adjustment option
- * The per-cell arithmetic is kernels/lsm_cell.h and the per-particle
- * arithmetic kernels/lsm_particle_cell.h, shared with the C path: the build
- * embeds this file with those headers spliced in at the #includes below
- * (build/gen/lsm_kernels.h), so the program needs no include path at run time.
+ * The per-cell arithmetic and its stencil gathers are kernels/lsm_cell.h and
+ * kernels/lsm_stencil.h, the per-particle arithmetic kernels/lsm_particle_cell.h,
+ * shared with the C path: the build embeds this file with those headers
+ * spliced in at the #includes below (build/gen/lsm_kernels.h), so the program
+ * needs no include path at run time.
  *
  * Buffers hold whole grids, ghosts included, laid out as lsm_grid: row stride
  * `stride` = nx + 2 LSM_GHOST floats, cell (i, j) of the interior at
@@ -52,8 +53,7 @@ inline int lsm_cl_at(int i, int j, int stride) {
  * nx x ny rounded up to whole groups; the host uses row segments, LY = 1.
  * Groups wholly inside the interior (all but the last of each row of groups)
  * take a path without per-item checks, which CPU implementations (PoCL)
- * vectorise across work-items (the checked path runs about 2x slower there);
- * the others check i < nx and j < ny. */
+ * vectorise across work-items; the others check i < nx and j < ny. */
 inline int lsm_cl_group_inside(int nx, int ny) {
   return (int)((get_group_id(0) + 1) * get_local_size(0)) <= nx &&
          (int)((get_group_id(1) + 1) * get_local_size(1)) <= ny;

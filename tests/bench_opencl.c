@@ -21,6 +21,7 @@
 #include <time.h>
 
 #include "solver/pde/lsm_backend.h"
+#include "solver/pde/lsm_fields.h"
 #include "solver/pde/lsm_morph.h"
 #include "solver/pde/lsm_scheme.h"
 
@@ -59,17 +60,17 @@ static double stage_c(lsm_grid *phi, lsm_grid *target, lsm_grid *out, int thread
 
 static lsm_status stage_cl(const lsm_backend *b, lsm_grid *phi, lsm_grid *target, int reps,
                            float dt, double *sec, lsm_err *err) {
-  void *st = NULL;
+  lsm_fields *f = NULL;
   double res;
-  LSM_TRY(b->ops->create(b->ctx, phi, target, 1, &st, err));
-  lsm_status s = b->ops->step(st, LSM_SCHEME_UPWIND, LSM_TIME_EULER, dt, NULL, err);
-  if (s == LSM_OK) s = b->ops->residual(st, &res, err);
+  LSM_TRY(lsm_fields_create(b, phi, target, 1, &f, err));
+  lsm_status s = lsm_fields_step(f, LSM_SCHEME_UPWIND, LSM_TIME_EULER, dt, err);
+  if (s == LSM_OK) s = lsm_fields_residual(f, &res, err);
   double t0 = now();
   for (int r = 0; r < reps && s == LSM_OK; ++r)
-    s = b->ops->step(st, LSM_SCHEME_UPWIND, LSM_TIME_EULER, dt, NULL, err);
-  if (s == LSM_OK) s = b->ops->residual(st, &res, err); /* waits for the queue */
+    s = lsm_fields_step(f, LSM_SCHEME_UPWIND, LSM_TIME_EULER, dt, err);
+  if (s == LSM_OK) s = lsm_fields_residual(f, &res, err); /* waits for the queue */
   *sec = now() - t0;
-  b->ops->destroy(&st);
+  lsm_fields_destroy(&f);
   return s;
 }
 
@@ -100,13 +101,16 @@ int main(int argc, char **argv) {
   lsm_err_clear(&err);
   lsm_backend *cl = NULL;
   /* The first open may fill the driver's own kernel cache; the second is timed as a warm one. */
-  if (lsm_backend_open(LSM_BACKEND_OPENCL, device, 1, &cl, &err) != LSM_OK) return die(&err);
-  const double first_build = cl->build_seconds;
+  if (lsm_backend_open("opencl", device, 1, &cl, &err) != LSM_OK) return die(&err);
+  lsm_backend_fact facts[LSM_BACKEND_FACTS_MAX];
+  lsm_backend_facts(cl, facts, LSM_BACKEND_FACTS_MAX);
+  const double first_build = facts[1].number; /* build_seconds */
   lsm_backend_close(&cl);
-  if (lsm_backend_open(LSM_BACKEND_OPENCL, device, 1, &cl, &err) != LSM_OK) return die(&err);
-  printf("# OpenCL device: %s\n", cl->device);
+  if (lsm_backend_open("opencl", device, 1, &cl, &err) != LSM_OK) return die(&err);
+  lsm_backend_facts(cl, facts, LSM_BACKEND_FACTS_MAX);
+  printf("# OpenCL device: %s\n", lsm_backend_device(cl));
   printf("# program build: first open %.3f s, second open %.3f s\n", first_build,
-         cl->build_seconds);
+         facts[1].number);
   printf("# best of %d timings; C on all cores = %d threads\n", repeats, ncpu);
   fflush(stdout);
 

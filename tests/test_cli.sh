@@ -33,6 +33,25 @@ case $out in *--heights*) ok ;; *) bad "help reconstruct does not list --heights
 out=$("$LSM" --help score 2>&1)
 check "--help score exits 0" [ $? -eq 0 ]
 case $out in "Usage: lsmorph score"*) ok ;; *) bad "--help score is not score's help: '$(printf '%s' "$out" | head -1)'" ;; esac
+# every help topic fits 80 columns; reconstruct's two screens (90 lines) and
+# names every option of reconstruct
+for topic in "" fill reconstruct score devices rules; do
+  "$LSM" help $topic >"$TMP/help" 2>&1
+  wide=$(awk 'length > 80 { print NR ": " $0; exit }' "$TMP/help")
+  check "help $topic: a line over 80 columns: $wide" [ -z "$wide" ]
+done
+"$LSM" help reconstruct >"$TMP/help" 2>&1
+n=$(lines "$TMP/help")
+check "help reconstruct has $n lines, more than 90" [ "$n" -le 90 ]
+for opt in -o --output --input --invert --spacing --heights --heights-from-names --pixel-size \
+    --max-pixels --max-voxels --dz --per-iteration --format --values --nrrd-encoding --mesh \
+    --no-slices --no-preview --method --interp --ends --align --scheme --time --cfl --max-iter \
+    --reinit-every --reinit-iters --tol --particles-per-cell --pls-reseed --pls-radius-adjust \
+    --seed --rules-off --threads --backend --device -q --quiet; do
+  check "help reconstruct does not list $opt" grep -q -e "[ ,]$opt[ ,]" "$TMP/help"
+done
+check "help reconstruct lists the methods" grep -q -e "--method ls|pls|blend " "$TMP/help"
+check "help reconstruct lists the formats" grep -q "nrrd, mha, vtk, exr, raw, nii, nii.gz" "$TMP/help"
 out=$("$LSM" --version 2>&1)
 check "--version exits 0" [ $? -eq 0 ]
 case $out in "lsmorph "[0-9]*.[0-9]*) ok ;; *) bad "--version printed '$out'" ;; esac

@@ -19,7 +19,7 @@ static void test_reconstruct_defaults(void **state) {
   assert_int_equal(parse(&cli, &err, 5, argv), LSM_OK);
   assert_int_equal(cli.command, LSM_CMD_RECONSTRUCT);
   assert_int_equal(cli.device, -1);
-  assert_int_equal(cli.backend, LSM_BACKEND_C);
+  assert_string_equal(cli.backend, "c");
   assert_true(cli.spacing == 1.0);
   assert_int_equal(cli.threads, 0);
   assert_true(cli.max_pixels == (uint64_t)1 << 28);
@@ -29,7 +29,7 @@ static void test_reconstruct_defaults(void **state) {
   assert_true(cli.stack.tol == 0.25);
   assert_int_equal(cli.heights_from_names, 0);
   assert_int_equal(cli.spacing_given, 0);
-  assert_int_equal(cli.nrrd_gzip, 0);
+  assert_int_equal(cli.nrrd_encoding, LSM_NRRD_RAW);
   assert_int_equal(cli.nrrd_encoding_given, 0);
   assert_true(cli.stack.pixel_dx == 1.0 && cli.stack.pixel_dy == 1.0);
 }
@@ -45,11 +45,11 @@ static void test_long_forms(void **state) {
   assert_int_equal(cli.device, 2);
   assert_int_equal(cli.quiet, 1);
   assert_int_equal(cli.stack.max_iter, 7);
-  assert_int_equal(cli.nrrd_gzip, 1);
+  assert_int_equal(cli.nrrd_encoding, LSM_NRRD_GZIP);
   assert_int_equal(cli.nrrd_encoding_given, 1);
   char *raw[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--nrrd-encoding", "raw"};
   assert_int_equal(parse(&cli, &err, 7, raw), LSM_OK);
-  assert_int_equal(cli.nrrd_gzip, 0);
+  assert_int_equal(cli.nrrd_encoding, LSM_NRRD_RAW);
   char *bad[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--nrrd-encoding", "bzip2"};
   assert_int_equal(parse(&cli, &err, 7, bad), LSM_ERR_USAGE);
   assert_non_null(strstr(err.msg, "--nrrd-encoding: 'bzip2' is not one of raw, gzip"));
@@ -124,6 +124,66 @@ static void test_score_options(void **state) {
   assert_non_null(strstr(err.msg, "--first"));
 }
 
+/* Every name of every choice option's enum list is accepted and gives its
+ * value; a name outside the list is refused with the list. */
+static void test_choices(void **state) {
+  (void)state;
+  lsm_cli cli;
+  lsm_err err;
+  for (int k = 0; k < LSM_METHOD_COUNT; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--method",
+                    (char *)lsm_method_name((lsm_method)k)};
+    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
+    assert_int_equal(cli.stack.method, k);
+  }
+  for (int k = 0; k < LSM_ALIGN_COUNT; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
+                    "--align", (char *)lsm_align_name((lsm_align)k)};
+    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
+    assert_int_equal(cli.stack.align, k);
+  }
+  for (int k = 0; k < LSM_ENDS_COUNT; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
+                    "--ends", (char *)lsm_end_rule_name((lsm_end_rule)k)};
+    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
+    assert_int_equal(cli.stack.ends, k);
+  }
+  for (int k = 0; k < LSM_SCHEME_COUNT; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
+                    "--scheme", (char *)lsm_scheme_name((lsm_scheme)k)};
+    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
+    assert_int_equal(cli.stack.morph.scheme, k);
+  }
+  static const char *const backends[] = {LSM_BACKEND_TABLE(LSM_BACKEND_NAME) "auto"};
+  for (size_t k = 0; k < sizeof backends / sizeof *backends; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--backend", (char *)backends[k]};
+    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
+    assert_string_equal(cli.backend, backends[k]);
+  }
+  for (int k = 0; k < LSM_VALUES_COUNT; ++k) {
+    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
+                    "--values", (char *)lsm_values_name((lsm_values)k)};
+    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
+    assert_int_equal(cli.values, k);
+  }
+  char *rk3[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--time", "rk3"};
+  assert_int_equal(parse(&cli, &err, 7, rk3), LSM_OK);
+  assert_int_equal(cli.stack.morph.time, LSM_TIME_RK3);
+  char *interp[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--interp=linear"};
+  assert_int_equal(parse(&cli, &err, 6, interp), LSM_OK);
+  assert_int_equal(cli.stack.interp, LSM_INTERP_LINEAR);
+  assert_int_equal(cli.interp_given, 1);
+  char *input[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--input", "outline"};
+  assert_int_equal(parse(&cli, &err, 7, input), LSM_OK);
+  assert_int_equal(cli.stack.input, LSM_INPUT_OUTLINE);
+  char *bad[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--method", "magic"};
+  assert_int_equal(parse(&cli, &err, 7, bad), LSM_ERR_USAGE);
+  assert_string_equal(err.msg, "--method: 'magic' is not one of ls, pls, blend");
+  char *bad_align[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--align", ""};
+  assert_int_equal(parse(&cli, &err, 7, bad_align), LSM_ERR_USAGE);
+  assert_string_equal(err.msg, "--align: '' is not one of auto, hull, none");
+}
+
 static void test_help_topics(void **state) {
   (void)state;
   const char *topics[] = {"reconstruct", "score", "devices"};
@@ -155,6 +215,7 @@ int main(void) {
       cmocka_unit_test(test_placement),
       cmocka_unit_test(test_pixel_size),
       cmocka_unit_test(test_score_options),
+      cmocka_unit_test(test_choices),
       cmocka_unit_test(test_help_topics),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

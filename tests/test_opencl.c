@@ -4,7 +4,7 @@
  * and without reinitialisation every 10 steps (weno5 with euler and rk3, and
  * with rk3 and reinitialisation), a morph state like a real one
  * (disc SDF -> offset ellipse, 96x80 cells, dx = dy = 1) runs 200 steps on
- * both backends through the ops table, as lsm_morph drives it:
+ * both backends through lsm_fields (the same driver lsm_morph uses):
  *   max |phi_opencl - phi_c| <= 1e-4 * max(nx, ny) * dx,
  *   the masks phi <= 0 differ in <= 0.1 % of the cells,
  *   the CFL dt and the residual agree to 1e-5 relative (every step).
@@ -20,16 +20,18 @@
  * (nothing written under XDG_CACHE_HOME), ghost fill on download, upload, the
  * stage hook refusal.
  *
- * XDG_CACHE_HOME is a temporary folder.  When no OpenCL device can be opened
+ * XDG_CACHE_HOME is a temporary folder.  Without an OpenCL platform or device
  * the tests print why and are skipped (the Makefile installs PoCL, so on CI
- * they run). */
+ * they run); a device that fails to build the program fails them. */
 #include "tests/lsm_test.h"
+#include "tests/lsm_test_pair.h"
 
 #include <dirent.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include "solver/pde/lsm_backend.h"
+#include "solver/pde/lsm_fields.h"
 #include "solver/base/lsm_grid.h"
 #include "solver/pde/lsm_morph.h"
 #include "solver/pde/lsm_particles.h"
@@ -54,31 +56,6 @@ const char *__lsan_default_suppressions(void) {
 
 /* ------------------------------------------------------------------------ */
 /* helpers                                                                   */
-
-static lsm_grid *new_grid(int nx, int ny, float dx, float dy) {
-  lsm_grid *g = NULL;
-  lsm_err err;
-  lsm_err_clear(&err);
-  assert_int_equal(lsm_grid_create(nx, ny, dx, dy, &g, &err), LSM_OK);
-  return g;
-}
-
-/* Source: SDF of a disc; target: an offset, squashed disc (an ellipse-like
- * field, not exactly a distance), so F changes sign and every Roe-Fix branch
- * is taken. */
-static void fill_pair(lsm_grid *src, lsm_grid *dst) {
-  const int nx = src->nx, ny = src->ny;
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      double x = (i + 0.5) * src->dx, y = (j + 0.5) * src->dy;
-      double ex = 0.42 * nx * src->dx, ey = 0.5 * ny * src->dy, r = 0.3 * ny * src->dy;
-      LSM_AT(src, i, j) = (float)(hypot(x - ex, y - ey) - r);
-      LSM_AT(dst, i, j) = (float)(hypot(x - 0.58 * nx * src->dx, 1.4 * (y - 0.55 * ny * src->dy)) -
-                                  0.26 * ny * src->dy);
-    }
-  lsm_grid_fill_ghosts(src);
-  lsm_grid_fill_ghosts(dst);
-}
 
 /* Files in a folder: how many end in suffix, how many do not. */
 static void scan_dir(const char *dir, const char *suffix, int *with, int *without) {
@@ -152,8 +129,10 @@ static int group_setup(void **state) {
   }
   if (setenv("XDG_CACHE_HOME", fx.cache, 1) != 0) return -1;
   lsm_err_clear(&fx.why);
-  if (lsm_backend_open(LSM_BACKEND_OPENCL, -1, 1, &fx.cl, &fx.why) != LSM_OK) fx.cl = NULL;
-  return 0;
+  const lsm_status st = lsm_backend_open("opencl", -1, 1, &fx.cl, &fx.why);
+  if (st == LSM_OK || st == LSM_ERR_UNSUPPORTED) return 0; /* no platform or no device: skip */
+  print_error("opencl: %s\n", fx.why.msg); /* a device that cannot build the program fails */
+  return -1;
 }
 
 static int group_teardown(void **state) {
@@ -175,7 +154,7 @@ static void test_list_devices(void **state) {
   assert_non_null(f);
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(lsm_backend_cl_list(f, &err), LSM_OK);
+  assert_int_equal(lsm_backend_list_devices(f, &err), LSM_OK);
   fclose(f);
   assert_non_null(strstr(buf, "  0: "));
   assert_non_null(strstr(buf, "compute unit"));
@@ -192,10 +171,11 @@ static void test_list_devices(void **state) {
   const char *name_end = strstr(name, " (");
   assert_true(name_end && name_end < mark);
   lsm_backend *b = NULL;
-  assert_int_equal(lsm_backend_open(LSM_BACKEND_OPENCL, -1, 1, &b, &err), LSM_OK);
+  assert_int_equal(lsm_backend_open("opencl", -1, 1, &b, &err), LSM_OK);
   char want[256];
   snprintf(want, sizeof want, "%.*s", (int)(name_end - name), name);
-  if (!strstr(b->device, want)) fail_msg("default device '%s', opened '%s'", want, b->device);
+  if (!strstr(lsm_backend_device(b), want))
+    fail_msg("default device '%s', opened '%s'", want, lsm_backend_device(b));
   lsm_backend_close(&b);
   free(buf);
 }
@@ -206,13 +186,14 @@ static void test_missing_device(void **state) {
   lsm_backend *b = NULL;
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(lsm_backend_open(LSM_BACKEND_OPENCL, 99, 1, &b, &err), LSM_ERR_INPUT);
+  assert_int_equal(lsm_backend_open("opencl", 99, 1, &b, &err), LSM_ERR_INPUT);
   assert_null(b);
   assert_non_null(strstr(err.msg, "device 99 does not exist"));
   /* auto falls back to C */
   lsm_err_clear(&err);
-  assert_int_equal(lsm_backend_open(LSM_BACKEND_AUTO, 99, 1, &b, &err), LSM_OK);
-  assert_ptr_equal(b->ops, lsm_backend_c_ops());
+  assert_int_equal(lsm_backend_open("auto", 99, 1, &b, &err), LSM_OK);
+  assert_string_equal(lsm_backend_name(b), "c");
+  assert_non_null(strstr(lsm_backend_fallback(b), "device 99 does not exist"));
   lsm_backend_close(&b);
 }
 
@@ -222,10 +203,20 @@ static void test_missing_device(void **state) {
 static void test_no_kernel_cache(void **state) {
   (void)state;
   NEED_DEVICE();
-  assert_int_equal(fx.cl->kernel_cache_hit, 0);
-  assert_true(fx.cl->build_seconds >= 0.0);
-  assert_string_equal(fx.cl->ops->name, "opencl");
-  assert_non_null(strchr(fx.cl->device, '('));
+  lsm_backend_fact facts[LSM_BACKEND_FACTS_MAX];
+  const int n = lsm_backend_facts(fx.cl, facts, LSM_BACKEND_FACTS_MAX);
+  assert_true(n >= 3);
+  assert_string_equal(facts[0].key, "device");
+  assert_int_equal(facts[0].kind, LSM_FACT_TEXT);
+  assert_non_null(strchr(facts[0].text, '('));
+  assert_string_equal(facts[1].key, "build_seconds");
+  assert_int_equal(facts[1].kind, LSM_FACT_NUMBER);
+  assert_true(facts[1].number >= 0.0);
+  assert_string_equal(facts[2].key, "kernel_cache_hit");
+  assert_int_equal(facts[2].kind, LSM_FACT_FLAG);
+  assert_int_equal(facts[2].flag, 0);
+  assert_string_equal(lsm_backend_name(fx.cl), "opencl");
+  assert_int_equal(lsm_backend_host_threads(fx.cl), 0);
   char dir[512];
   int files = 0, others = 0;
   snprintf(dir, sizeof dir, "%s/lsmorph", fx.cache);
@@ -235,8 +226,8 @@ static void test_no_kernel_cache(void **state) {
   assert_int_equal(files, 0);
 }
 
-/* upload / download round trip, ghosts filled on download, hook refusal,
- * residual of phi == target is 0. */
+/* upload / download round trip, ghosts filled on download, residual of
+ * phi == target is 0, an empty particle set. */
 static void test_plumbing(void **state) {
   (void)state;
   NEED_DEVICE();
@@ -244,49 +235,42 @@ static void test_plumbing(void **state) {
   lsm_grid *a = new_grid(nx, ny, 1.0f, 1.0f), *t = new_grid(nx, ny, 1.0f, 1.0f);
   lsm_grid *back = new_grid(nx, ny, 1.0f, 1.0f);
   fill_pair(a, t);
-  const lsm_backend_ops *ops = fx.cl->ops;
-  void *st = NULL;
+  lsm_fields *f = NULL;
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(ops->create(fx.cl->ctx, a, t, 1, &st, &err), LSM_OK);
-  assert_null(ops->host_phi(st));
+  assert_int_equal(lsm_fields_create(fx.cl, a, t, 1, &f, &err), LSM_OK);
+  assert_string_equal(lsm_fields_backend_name(f), "opencl");
   /* Garbage in the ghosts of the upload: download must return them filled. */
   for (int j = 0; j < ny; ++j) LSM_AT(a, -2, j) = 1e6f;
-  assert_int_equal(ops->upload(st, a, &err), LSM_OK);
-  assert_int_equal(ops->download(st, back, &err), LSM_OK);
+  assert_int_equal(lsm_fields_upload(f, a, &err), LSM_OK);
+  assert_int_equal(lsm_fields_download(f, back, &err), LSM_OK);
   lsm_grid_fill_ghosts(a);
   assert_memory_equal(a->base, back->base,
                       (size_t)(ny + 2 * LSM_GHOST) * (size_t)a->stride * sizeof(float));
   /* Residual: phi = target gives 0. */
-  assert_int_equal(ops->upload(st, t, &err), LSM_OK);
+  assert_int_equal(lsm_fields_upload(f, t, &err), LSM_OK);
   double norm = -1.0, dt = 0.0;
-  assert_int_equal(ops->residual(st, &norm, &err), LSM_OK);
+  assert_int_equal(lsm_fields_residual(f, &norm, &err), LSM_OK);
   assert_true(norm == 0.0);
-  assert_int_equal(ops->cfl_dt(st, LSM_SCHEME_UPWIND, 0.75, &dt, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(f, LSM_SCHEME_UPWIND, 0.75, &dt, &err), LSM_OK);
   assert_true(isinf(dt));
-  /* Stage hooks are refused (phi is on the device); particles have their ops. */
-  lsm_stage_hook hook = {NULL, NULL};
-  assert_int_equal(ops->step(st, LSM_SCHEME_UPWIND, LSM_TIME_EULER, 0.1f, &hook, &err),
-                   LSM_ERR_UNSUPPORTED);
-  assert_non_null(strstr(err.msg, "no stage hooks"));
-  assert_non_null(ops->pls_load);
-  assert_non_null(ops->pls_correct);
-  assert_null(lsm_backend_c_ops()->pls_load);
-  assert_null(lsm_backend_c_ops()->pls_correct);
-  /* An empty particle set: a correction does nothing. */
+  /* A correction before any set is loaded is refused; an empty set does nothing but count
+   * the step. */
+  lsm_pls_stats q;
+  memset(&q, 0, sizeof q);
+  assert_int_equal(lsm_fields_pls_correct(f, &q, &err), LSM_ERR_INTERNAL);
+  assert_true(lsm_fields_has_particles(f));
   lsm_pls_view none = {0, NULL, NULL, NULL, NULL};
-  lsm_pls_counts counts = {1, 1, 1, 1, 1};
   lsm_err_clear(&err);
-  assert_int_equal(ops->pls_load(st, &none, 1, &err), LSM_OK);
-  assert_int_equal(ops->pls_correct(st, &counts, &err), LSM_OK);
-  assert_true(counts.removed == 0 && counts.stray == 0 && counts.escaped == 0 &&
-              counts.corrected == 0 && counts.live == 0);
-  assert_int_equal(ops->step(st, LSM_SCHEME_UPWIND, LSM_TIME_RK3, 0.1f, NULL, &err), LSM_OK);
+  assert_int_equal(lsm_fields_pls_load(f, &none, 1, &err), LSM_OK);
+  assert_int_equal(lsm_fields_pls_correct(f, &q, &err), LSM_OK);
+  assert_true(q.left_domain == 0 && q.stray == 0 && q.escaped_total == 0 &&
+              q.corrected_total == 0 && q.steps == 1);
+  assert_int_equal(lsm_fields_step(f, LSM_SCHEME_UPWIND, LSM_TIME_RK3, 0.1f, &err), LSM_OK);
   /* Reinit with 0 iterations is a no-op. */
-  lsm_err_clear(&err);
-  assert_int_equal(ops->reinit(st, 0, &err), LSM_OK);
-  ops->destroy(&st);
-  assert_null(st);
+  assert_int_equal(lsm_fields_reinit(f, 0, &err), LSM_OK);
+  lsm_fields_destroy(&f);
+  assert_null(f);
   lsm_grid_destroy(&a);
   lsm_grid_destroy(&t);
   lsm_grid_destroy(&back);
@@ -303,28 +287,27 @@ static void test_large_grid(void **state) {
   lsm_grid *src = new_grid(nx, ny, 1.0f, 1.0f), *dst = new_grid(nx, ny, 1.0f, 1.0f);
   lsm_grid *got = new_grid(nx, ny, 1.0f, 1.0f), *ref = new_grid(nx, ny, 1.0f, 1.0f);
   fill_pair(src, dst);
-  const lsm_backend_ops *c_ops = lsm_backend_c_ops(), *cl_ops = fx.cl->ops;
-  void *cs = NULL, *gs = NULL;
+  lsm_fields *cs = NULL, *gs = NULL;
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(c_ops->create(NULL, src, dst, 1, &cs, &err), LSM_OK);
-  assert_int_equal(cl_ops->create(fx.cl->ctx, src, dst, 1, &gs, &err), LSM_OK);
+  assert_int_equal(lsm_fields_create(NULL, src, dst, 1, &cs, &err), LSM_OK);
+  assert_int_equal(lsm_fields_create(fx.cl, src, dst, 1, &gs, &err), LSM_OK);
   double dt_c, dt_g, res_c, res_g;
-  assert_int_equal(c_ops->cfl_dt(cs, LSM_SCHEME_ROEFIX, 0.75, &dt_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->cfl_dt(gs, LSM_SCHEME_ROEFIX, 0.75, &dt_g, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(cs, LSM_SCHEME_ROEFIX, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(gs, LSM_SCHEME_ROEFIX, 0.75, &dt_g, &err), LSM_OK);
   assert_true(dt_c == dt_g);
-  assert_int_equal(c_ops->cfl_dt(cs, LSM_SCHEME_UPWIND, 0.75, &dt_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->cfl_dt(gs, LSM_SCHEME_UPWIND, 0.75, &dt_g, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(cs, LSM_SCHEME_UPWIND, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(gs, LSM_SCHEME_UPWIND, 0.75, &dt_g, &err), LSM_OK);
   assert_true(dt_c == dt_g);
   for (int n = 0; n < 4; ++n) {
-    assert_int_equal(c_ops->step(cs, LSM_SCHEME_UPWIND, LSM_TIME_RK3, (float)dt_c, NULL, &err), LSM_OK);
-    assert_int_equal(cl_ops->step(gs, LSM_SCHEME_UPWIND, LSM_TIME_RK3, (float)dt_c, NULL, &err), LSM_OK);
+    assert_int_equal(lsm_fields_step(cs, LSM_SCHEME_UPWIND, LSM_TIME_RK3, (float)dt_c, &err), LSM_OK);
+    assert_int_equal(lsm_fields_step(gs, LSM_SCHEME_UPWIND, LSM_TIME_RK3, (float)dt_c, &err), LSM_OK);
   }
-  assert_int_equal(c_ops->residual(cs, &res_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->residual(gs, &res_g, &err), LSM_OK);
+  assert_int_equal(lsm_fields_residual(cs, &res_c, &err), LSM_OK);
+  assert_int_equal(lsm_fields_residual(gs, &res_g, &err), LSM_OK);
   assert_true(rel_diff(res_c, res_g) <= 1e-5);
-  assert_int_equal(c_ops->download(cs, ref, &err), LSM_OK);
-  assert_int_equal(cl_ops->download(gs, got, &err), LSM_OK);
+  assert_int_equal(lsm_fields_download(cs, ref, &err), LSM_OK);
+  assert_int_equal(lsm_fields_download(gs, got, &err), LSM_OK);
   double max_diff = 0.0;
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
@@ -334,8 +317,8 @@ static void test_large_grid(void **state) {
   print_message("opencl: %dx%d, 4 rk3 steps: max|phi_cl - phi_c| = %.3g, residual rel %.2g\n", nx,
                 ny, max_diff, rel_diff(res_c, res_g));
   assert_true(max_diff <= 1e-4 * nx);
-  c_ops->destroy(&cs);
-  cl_ops->destroy(&gs);
+  lsm_fields_destroy(&cs);
+  lsm_fields_destroy(&gs);
   lsm_grid_destroy(&src);
   lsm_grid_destroy(&dst);
   lsm_grid_destroy(&got);
@@ -365,39 +348,38 @@ static void test_morph_matches_c(void **state) {
   lsm_grid *src = new_grid(nx, ny, mc->dx, mc->dy), *dst = new_grid(nx, ny, mc->dx, mc->dy);
   lsm_grid *got = new_grid(nx, ny, mc->dx, mc->dy), *ref = new_grid(nx, ny, mc->dx, mc->dy);
   fill_pair(src, dst);
-  const lsm_backend_ops *c_ops = lsm_backend_c_ops(), *cl_ops = fx.cl->ops;
-  void *cs = NULL, *gs = NULL;
+  lsm_fields *cs = NULL, *gs = NULL;
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(c_ops->create(NULL, src, dst, 1, &cs, &err), LSM_OK);
-  assert_int_equal(cl_ops->create(fx.cl->ctx, src, dst, 1, &gs, &err), LSM_OK);
+  assert_int_equal(lsm_fields_create(NULL, src, dst, 1, &cs, &err), LSM_OK);
+  assert_int_equal(lsm_fields_create(fx.cl, src, dst, 1, &gs, &err), LSM_OK);
 
   double dt_c = 0.0, dt_g = 0.0, res_c = 0.0, res_g = 0.0;
   double worst_dt = 0.0, worst_res = 0.0, res0 = 0.0;
-  assert_int_equal(c_ops->cfl_dt(cs, mc->scheme, 0.75, &dt_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->cfl_dt(gs, mc->scheme, 0.75, &dt_g, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(cs, mc->scheme, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(gs, mc->scheme, 0.75, &dt_g, &err), LSM_OK);
   worst_dt = rel_diff(dt_c, dt_g);
-  assert_int_equal(c_ops->residual(cs, &res0, &err), LSM_OK);
+  assert_int_equal(lsm_fields_residual(cs, &res0, &err), LSM_OK);
   assert_true(dt_c > 0.0 && isfinite(dt_c));
   for (int n = 1; n <= steps; ++n) {
-    assert_int_equal(c_ops->step(cs, mc->scheme, mc->time, (float)dt_c, NULL, &err), LSM_OK);
-    assert_int_equal(cl_ops->step(gs, mc->scheme, mc->time, (float)dt_c, NULL, &err), LSM_OK);
+    assert_int_equal(lsm_fields_step(cs, mc->scheme, mc->time, (float)dt_c, &err), LSM_OK);
+    assert_int_equal(lsm_fields_step(gs, mc->scheme, mc->time, (float)dt_c, &err), LSM_OK);
     if (mc->reinit_every > 0 && n % mc->reinit_every == 0) {
-      assert_int_equal(c_ops->reinit(cs, 10, &err), LSM_OK);
-      assert_int_equal(cl_ops->reinit(gs, 10, &err), LSM_OK);
+      assert_int_equal(lsm_fields_reinit(cs, 10, &err), LSM_OK);
+      assert_int_equal(lsm_fields_reinit(gs, 10, &err), LSM_OK);
     }
-    assert_int_equal(c_ops->residual(cs, &res_c, &err), LSM_OK);
-    assert_int_equal(cl_ops->residual(gs, &res_g, &err), LSM_OK);
+    assert_int_equal(lsm_fields_residual(cs, &res_c, &err), LSM_OK);
+    assert_int_equal(lsm_fields_residual(gs, &res_g, &err), LSM_OK);
     double r = rel_diff(res_c, res_g);
     if (r > worst_res) worst_res = r;
   }
   /* The CFL reduction on the evolved state as well. */
-  assert_int_equal(c_ops->cfl_dt(cs, mc->scheme, 0.75, &dt_c, &err), LSM_OK);
-  assert_int_equal(cl_ops->cfl_dt(gs, mc->scheme, 0.75, &dt_g, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(cs, mc->scheme, 0.75, &dt_c, &err), LSM_OK);
+  assert_int_equal(lsm_fields_cfl_dt(gs, mc->scheme, 0.75, &dt_g, &err), LSM_OK);
   if (rel_diff(dt_c, dt_g) > worst_dt) worst_dt = rel_diff(dt_c, dt_g);
 
-  assert_int_equal(c_ops->download(cs, ref, &err), LSM_OK);
-  assert_int_equal(cl_ops->download(gs, got, &err), LSM_OK);
+  assert_int_equal(lsm_fields_download(cs, ref, &err), LSM_OK);
+  assert_int_equal(lsm_fields_download(gs, got, &err), LSM_OK);
   double max_diff = 0.0;
   long mask_diff = 0;
   for (int j = 0; j < ny; ++j)
@@ -419,8 +401,8 @@ static void test_morph_matches_c(void **state) {
   assert_true(worst_res <= 1e-5);
   /* The morph moved: the residual fell. */
   assert_true(res_c < 0.5 * res0);
-  c_ops->destroy(&cs);
-  cl_ops->destroy(&gs);
+  lsm_fields_destroy(&cs);
+  lsm_fields_destroy(&gs);
   lsm_grid_destroy(&src);
   lsm_grid_destroy(&dst);
   lsm_grid_destroy(&got);
@@ -495,19 +477,19 @@ static void test_pls_correct_matches_c(void **state) {
   assert_int_equal(lsm_pls_set(p, N, x, y, sg, r, &err), LSM_OK);
   const lsm_pls_view set = lsm_pls_view_get(p);
   const lsm_pls_view rev = {N, rx, ry, rr, rs};
-  const lsm_backend_ops *ops = fx.cl->ops;
-  void *st = NULL;
-  assert_int_equal(ops->create(fx.cl->ctx, phi, phi, 1, &st, &err), LSM_OK);
-  lsm_pls_counts c[2];
+  lsm_fields *st = NULL;
+  assert_int_equal(lsm_fields_create(fx.cl, phi, phi, 1, &st, &err), LSM_OK);
+  lsm_pls_stats c[2];
   for (int pass = 0; pass < 2; ++pass) {
-    assert_int_equal(ops->upload(st, phi, &err), LSM_OK);
-    assert_int_equal(ops->pls_load(st, pass ? &rev : &set, 0, &err), LSM_OK);
-    assert_int_equal(ops->pls_correct(st, &c[pass], &err), LSM_OK);
+    memset(&c[pass], 0, sizeof c[pass]);
+    assert_int_equal(lsm_fields_upload(st, phi, &err), LSM_OK);
+    assert_int_equal(lsm_fields_pls_load(st, pass ? &rev : &set, 0, &err), LSM_OK);
+    assert_int_equal(lsm_fields_pls_correct(st, &c[pass], &err), LSM_OK);
     if (pass == 0) {
       /* the host set is read by pls_load only: correct it now */
       assert_int_equal(lsm_pls_correct(p, ref, &err), LSM_OK);
     }
-    assert_int_equal(ops->download(st, got, &err), LSM_OK);
+    assert_int_equal(lsm_fields_download(st, got, &err), LSM_OK);
     double max_diff = 0.0;
     long changed = 0;
     for (int j = 0; j < ny; ++j)
@@ -519,23 +501,23 @@ static void test_pls_correct_matches_c(void **state) {
     const lsm_pls_stats *q = lsm_pls_stats_get(p);
     print_message("opencl: pls correction (%s order): %lld escaped, %lld strays, %lld corrected "
                   "(C: %lld, %lld, %lld); max|phi_cl - phi_c| = %.3g\n",
-                  pass ? "reverse" : "seeded", c[pass].escaped, c[pass].stray,
-                  c[pass].corrected, q->escaped_last, q->stray, q->corrected_last, max_diff);
+                  pass ? "reverse" : "seeded", c[pass].escaped_last, c[pass].stray,
+                  c[pass].corrected_last, q->escaped_last, q->stray, q->corrected_last, max_diff);
     assert_true(max_diff == 0.0);
-    assert_int_equal(c[pass].escaped, q->escaped_last);
+    assert_int_equal(c[pass].escaped_last, q->escaped_last);
     assert_int_equal(c[pass].stray, q->stray);
-    assert_int_equal(c[pass].corrected, q->corrected_last);
-    assert_int_equal(c[pass].removed, 0);
-    assert_int_equal(c[pass].live, N);
-    assert_int_equal(c[pass].corrected, changed);
+    assert_int_equal(c[pass].corrected_last, q->corrected_last);
+    assert_int_equal(c[pass].left_domain, 0);
+    assert_int_equal(c[pass].steps, 1);
+    assert_int_equal(c[pass].corrected_last, changed);
     assert_true(q->escaped_last > 100 && q->stray > 10 && q->corrected_last > 100);
   }
   /* The strays go at the next correction. */
-  lsm_pls_counts next;
-  assert_int_equal(ops->pls_correct(st, &next, &err), LSM_OK);
-  assert_int_equal(next.removed, c[1].stray);
-  assert_int_equal(next.live, N - c[1].stray);
-  ops->destroy(&st);
+  lsm_pls_stats next;
+  memset(&next, 0, sizeof next);
+  assert_int_equal(lsm_fields_pls_correct(st, &next, &err), LSM_OK);
+  assert_int_equal(next.left_domain, c[1].stray);
+  lsm_fields_destroy(&st);
   lsm_pls_destroy(&p);
   lsm_grid_destroy(&phi);
   lsm_grid_destroy(&ref);

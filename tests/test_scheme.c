@@ -12,8 +12,8 @@
 
 #include "kernels/lsm_cell.h"
 #include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_fields.h"
 #include "solver/pde/lsm_morph.h"
-#include "solver/pde/lsm_reinit.h"
 #include "solver/pde/lsm_scheme.h"
 #include "solver/sdf/lsm_sdf.h"
 #include "solver/base/lsm_status.h"
@@ -28,6 +28,28 @@ static lsm_grid *new_grid(int nx, int ny, float dx, float dy) {
   assert_int_equal(lsm_grid_create(nx, ny, dx, dy, &g, &err), LSM_OK);
   assert_non_null(g);
   return g;
+}
+
+/* One step of the integrator on phi, and `iterations` reinitialisation steps,
+ * on the C backend through lsm_fields (as lsm_morph runs them). */
+static void step_c(lsm_grid *phi, const lsm_grid *tgt, lsm_scheme scheme, lsm_time time, float dt) {
+  lsm_fields *f = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_fields_create(NULL, phi, tgt, 1, &f, &err), LSM_OK);
+  assert_int_equal(lsm_fields_step(f, scheme, time, dt, &err), LSM_OK);
+  assert_int_equal(lsm_fields_download(f, phi, &err), LSM_OK);
+  lsm_fields_destroy(&f);
+}
+
+static void reinit_c(lsm_grid *phi, int iterations) {
+  lsm_fields *f = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_fields_create(NULL, phi, phi, 1, &f, &err), LSM_OK);
+  assert_int_equal(lsm_fields_reinit(f, iterations, &err), LSM_OK);
+  assert_int_equal(lsm_fields_download(f, phi, &err), LSM_OK);
+  lsm_fields_destroy(&f);
 }
 
 /* Physical coordinates of cell centres, the grid centred on the origin. */
@@ -718,10 +740,8 @@ static void test_integrators_agree(void **state) {
   fill_circle(phi0, 0, 0, 20.0, 1.0);
   fill_circle(tgt, 0, 0, 10.0, 1.0);
   lsm_grid *e = NULL, *r2 = NULL, *r3 = NULL;
-  lsm_stepper *st = NULL;
   lsm_err err;
   lsm_err_clear(&err);
-  assert_int_equal(lsm_stepper_create(phi0, &st, &err), LSM_OK);
   double d12[2], d23[2];
   const float dts[2] = {0.04f, 0.02f};
   for (int s = 0; s < 2; ++s) {
@@ -730,9 +750,9 @@ static void test_integrators_agree(void **state) {
       assert_int_equal(lsm_grid_clone(phi0, &e, &err), LSM_OK);
       assert_int_equal(lsm_grid_clone(phi0, &r2, &err), LSM_OK);
       assert_int_equal(lsm_grid_clone(phi0, &r3, &err), LSM_OK);
-      lsm_step(st, scheme, LSM_TIME_EULER, e, tgt, dts[s], 1);
-      lsm_step(st, scheme, LSM_TIME_RK2, r2, tgt, dts[s], 1);
-      lsm_step(st, scheme, LSM_TIME_RK3, r3, tgt, dts[s], 1);
+      step_c(e, tgt, scheme, LSM_TIME_EULER, dts[s]);
+      step_c(r2, tgt, scheme, LSM_TIME_RK2, dts[s]);
+      step_c(r3, tgt, scheme, LSM_TIME_RK3, dts[s]);
       /* Compare in an annulus 12 <= |x| <= 28 (smooth, away from the centre
        * kink and the boundary). */
       double m12 = 0, m23 = 0, m12min = INFINITY;
@@ -762,7 +782,6 @@ static void test_integrators_agree(void **state) {
   /* RK2-RK3 is O(dt^3): halving dt divides it by 8 asymptotically; the values
    * are ~1e-4 and ~1e-5, so allow float round-off (values ~30: ulp 2e-6). */
   assert_true(d23[1] <= d23[0] / 4.0 + 2e-6);
-  lsm_stepper_destroy(&st);
   lsm_grid_destroy(&phi0);
   lsm_grid_destroy(&tgt);
 }
@@ -1076,11 +1095,7 @@ static void test_reinit(void **state) {
   fill_circle(phi, 0.4, -0.3, r, 3.0);
   double dev0;
   const double r_before = front_radius(phi, 0.4, -0.3, r, &dev0, NULL);
-  lsm_reinit *re = NULL;
-  lsm_err err;
-  lsm_err_clear(&err);
-  assert_int_equal(lsm_reinit_create(phi, &re, &err), LSM_OK);
-  lsm_reinit_run(re, phi, 40, 1);
+  reinit_c(phi, 40);
   double dev1;
   const double r_after = front_radius(phi, 0.4, -0.3, r, &dev1, NULL);
   print_message("reinit: front radius %.4f -> %.4f (max deviation %.4f -> %.4f)\n", r_before,
@@ -1107,11 +1122,12 @@ static void test_reinit(void **state) {
   assert_true(worst < 0.1);
   /* Zero iterations: nothing changes. */
   lsm_grid *copy = NULL;
+  lsm_err err;
+  lsm_err_clear(&err);
   assert_int_equal(lsm_grid_clone(phi, &copy, &err), LSM_OK);
-  lsm_reinit_run(re, phi, 0, 1);
+  reinit_c(phi, 0);
   assert_close(max_abs_diff(phi, copy), 0.0, 0.0);
   lsm_grid_destroy(&copy);
-  lsm_reinit_destroy(&re);
   lsm_grid_destroy(&phi);
 }
 
@@ -1196,7 +1212,7 @@ static void test_reinit_cell_by_hand(void **state) {
                -1.75, 1e-6);
 }
 
-/* One pseudo-time step of lsm_reinit_run on a whole grid, every cell by hand.
+/* One pseudo-time step of the reinitialisation on a whole grid, every cell by hand.
  * phi0 = 3 (|x - c| - r), a slab in x (flat in y), dx = 0.5, dy = 1, c on the
  * centre of column 7 of 15, r = 2.15: with k = i - 7, phi0 = 1.5 |k| - 6.45
  * (-6.45, -4.95, -3.45, -1.95, -0.45 | 1.05, 2.55, 4.05 for |k| = 0..7).
@@ -1213,11 +1229,7 @@ static void test_reinit_one_step(void **state) {
   lsm_grid *phi = new_grid(nx, ny, 0.5f, 1.0f);
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) LSM_AT(phi, i, j) = (float)(1.5 * abs(i - 7) - 6.45);
-  lsm_reinit *re = NULL;
-  lsm_err err;
-  lsm_err_clear(&err);
-  assert_int_equal(lsm_reinit_create(phi, &re, &err), LSM_OK);
-  lsm_reinit_run(re, phi, 1, 1);
+  reinit_c(phi, 1);
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const int k = abs(i - 7);
@@ -1230,7 +1242,6 @@ static void test_reinit_one_step(void **state) {
       /* float arithmetic on values up to 6.45: a few ulp */
       assert_close(LSM_AT(phi, i, j), want, 1e-5);
     }
-  lsm_reinit_destroy(&re);
   lsm_grid_destroy(&phi);
 }
 
@@ -1245,15 +1256,10 @@ static void test_reinit_tiny_pixels(void **state) {
   lsm_grid *phi = new_grid(n, n, (float)h, (float)h);
   fill_circle(phi, 0.4 * h, -0.3 * h, r * h, 3.0);
   const double r_before = front_radius(phi, 0.4 * h, -0.3 * h, r * h, NULL, NULL) / h;
-  lsm_reinit *re = NULL;
-  lsm_err err;
-  lsm_err_clear(&err);
-  assert_int_equal(lsm_reinit_create(phi, &re, &err), LSM_OK);
-  lsm_reinit_run(re, phi, 40, 1);
+  reinit_c(phi, 40);
   const double r_after = front_radius(phi, 0.4 * h, -0.3 * h, r * h, NULL, NULL) / h;
   print_message("reinit at pixel size 1e-25: front radius %.4f -> %.4f px\n", r_before, r_after);
   assert_close(r_after, r_before, 0.1);
-  lsm_reinit_destroy(&re);
   lsm_grid_destroy(&phi);
 }
 

@@ -1,7 +1,5 @@
 #include "solver/app/lsm_cli.h"
 
-#include "io/lsm_io.h"
-
 #include <ctype.h>
 #include <errno.h>
 #include <limits.h>
@@ -9,298 +7,265 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char general_help[] =
-    "lsmorph " LSM_VERSION " - fill the gaps between sparse parallel slices by level-set morphing\n"
-    "\n"
-    "Usage:\n"
-    "  lsmorph fill LABELS -o OUT [options]      (label volumes: .nii, .nii.gz, .nrrd)\n"
-    "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
-    "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
-    "  lsmorph devices\n"
-    "  lsmorph --help [COMMAND] | --version | help fill|reconstruct|score|devices|rules\n"
-    "\n"
-    "Commands:\n"
-    "  fill          fill the slices between the drawn slices of a NIfTI or NRRD label map,\n"
-    "                every label at once ('lsmorph help fill')\n"
-    "  reconstruct   read PNG or TIFF slices, morph between consecutive slices, write a volume\n"
-    "  score         compare a reconstruction with full-resolution truth slices\n"
-    "  devices       list the OpenCL platforms and devices\n"
-    "\n"
-    "Run 'lsmorph help reconstruct' for the options.  Every option also takes the\n"
-    "form --name=value; after '--' every argument is a folder (for names that\n"
-    "start with '-').\n";
+#include "solver/app/lsm_fill_cmd.h"
+#include "solver/recon/lsm_rules.h"
 
-static const char reconstruct_help[] =
-    "Usage: lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
-    "       (-o is also --output)\n"
-    "\n"
-    "Reads the PNG and TIFF files of SLICE_DIR (.png, .tif, .tiff; one page each) in\n"
-    "natural order (2.png before 10.png), one slice each, evolves each slice into the\n"
-    "next with phi_t + (phi - phi_target)|grad phi| = 0,\n"
-    "and writes the stacked slices to OUT_DIR.  An empty slice (no foreground) ends\n"
-    "the object: each part of the last section beside it closes inside that gap the\n"
-    "way the slices before it were narrowing, up to mid-gap; past it a small tip\n"
-    "reaches the empty slice when that slice is the first or last one given (see\n"
-    "--ends; solver/README.md, section 8).  Nothing is extrapolated past the first\n"
-    "and last slices: keep one empty slice beyond each end for the object to close\n"
-    "there.\n"
-    "\n"
-    "Input:\n"
-    "  --input mask|outline   mask: filled regions (default); outline: thin closed\n"
-    "                         8-connected contours, inside found by parity (nested\n"
-    "                         contours, holes, islands in holes)\n"
-    "  --invert               foreground is dark (default: luminance >= 50 %; label\n"
-    "                         masks stored as 0/1 are read as non-zero = foreground)\n"
-    "  --spacing Z            distance between consecutive slices (default 1); with\n"
-    "                         --heights-from-names, between consecutive numbers\n"
-    "  --heights FILE         one height per slice, strictly increasing (overrides\n"
-    "                         --spacing); blank lines and # comments allowed\n"
-    "  --heights-from-names   each slice's height is the number its file name ends\n"
-    "                         with (slice_012.png: 12) times --spacing, for slices kept\n"
-    "                         under their index in the scan (001.png 009.png 017.png,\n"
-    "                         or unevenly); without it consecutive files are --spacing\n"
-    "                         apart whatever their names (a note says when the names\n"
-    "                         number the slices with gaps)\n"
-    "  --pixel-size S|SX,SY   physical size of a pixel (default 1), or its width (x,\n"
-    "                         along a row) and height (y, down a column) when it is\n"
-    "                         not square; all distances, heights and the output\n"
-    "                         signed distance use this unit;\n"
-    "                         the pixel size, --spacing, --dz and every gap between\n"
-    "                         heights must lie in 1e-30 .. 1e30 (lengths are floats);\n"
-    "                         an output step below about 1.8e-15 of the largest\n"
-    "                         |height| is refused (it would repeat heights)\n"
-    "  --max-pixels N         refuse slices with more pixels (default 268435456); with\n"
-    "                         --align auto|hull also a gap's working canvas, up to\n"
-    "                         (2W+4) x (2H+4) cells for W x H slices, must stay\n"
-    "                         within 4 N: (W+2) x (H+2) <= N (or use --align none);\n"
-    "                         whatever N, a working grid has at most 2^31 - 1 cells\n"
-    "  --max-voxels N         refuse runs whose output volume would have more voxels\n"
-    "                         (default 17179869184 = 2^34; with --per-iteration,\n"
-    "                         whose slice count is not known ahead, the run stops\n"
-    "                         with an error when the next slice would pass N)\n"
-    "\n";
+#define COUNT_OF(a) ((int)(sizeof(a) / sizeof *(a)))
 
-/* (the help is split: C17 compilers need to support string literals of 4095 bytes only) */
-static const char reconstruct_help_output[] =
-    "Output:\n"
-    "  --dz Z                 output slice spacing (default: the pixel size, isotropic\n"
-    "                         voxels; the smaller side of a pixel that is not square);\n"
-    "                         output heights are z0, z0+dz, ... up to the last input\n"
-    "                         height; input heights on that grid get their input\n"
-    "                         slice back exactly (a note says when the last one is not\n"
-    "                         on it, and which --dz would end on it)\n"
-    "  --per-iteration        the design document's mode: every solver iteration of\n"
-    "                         every pair is a slice, heights by linspace per pair;\n"
-    "                         linear profile (--interp and --ends do not apply); next\n"
-    "                         to an empty slice the shape shrinks until it vanishes\n"
-    "                         and its iterates fill the half gap beside the full slice\n"
-    "  --no-slices            do not write slices/*.png\n"
-    "  --format LIST          volume formats, comma separated (default nrrd):\n"
-    "                         nrrd, mha (MetaImage), vtk (legacy VTK), nii (NIfTI-1),\n"
-    "                         nii.gz (NIfTI-1, gzip), exr (one OpenEXR file per\n"
-    "                         slice), raw (+ volume.json)\n"
-    "  --values sdf|mask      sdf: float32 signed distance (default); mask: uint8,\n"
-    "                         255 inside, 0 outside (EXR: half 1.0 / 0.0)\n"
-    "  --nrrd-encoding raw|gzip  volume.nrrd's samples as they are (default) or as\n"
-    "                         one gzip stream (NRRD's standard encoding gzip, as 3D\n"
-    "                         Slicer writes it; masks shrink most)\n"
-    "  --mesh                 also write surface.ply, a closed triangle mesh of the\n"
-    "                         surface phi = 0\n"
-    "  --no-preview           do not write preview.png and preview3d.png\n"
-    "\n";
+/* ---- the choices, from the lists that declare their enums ---------------------------- */
 
-static const char reconstruct_help_method[] =
-    "Method:\n"
-    "  --method ls|pls|blend  ls: level-set morph (default); pls: level-set morph\n"
-    "                         corrected by Lagrangian particles (keeps corners and thin\n"
-    "                         features); blend: linear interpolation of the two signed\n"
-    "                         distance functions\n"
-    "  --particles-per-cell N pls: particles seeded per band cell, half of each sign\n"
-    "                         (odd: one more positive; 2 .. 256, default 16)\n"
-    "  --pls-reseed N         pls: reseed the particles every N steps (default 0 = never)\n"
-    "  --pls-radius-adjust    pls: reset particle radii after each correction (off)\n"
-    "  --seed N               pls: random seed, 0 .. 2^64 - 1 (same seed, same volume,\n"
-    "                         any --threads)\n"
-    "  --scheme upwind|roe-fix|weno5  numerical Hamiltonian (default upwind:\n"
-    "                         first-order Godunov; roe-fix: Algorithm 3.1 of the design\n"
-    "                         document; weno5: fifth-order HJ-WENO derivatives in the\n"
-    "                         Godunov Hamiltonian, with --time rk3, not monotone)\n"
-    "  --time euler|rk2|rk3   time integrator (default euler; rk2/rk3: TVD Runge-Kutta)\n"
-    "  --cfl C                CFL number, 0 < C (default 0.75; upwind and roe-fix are\n"
-    "                         monotone up to 1, a note says when C is above)\n"
-    "  --reinit-every N       reinitialise phi to a signed distance every N steps\n"
-    "                         (default 0 = never, as in the design document)\n"
-    "  --reinit-iters N       pseudo-time iterations per reinitialisation (1 .. 100000,\n"
-    "                         default 10)\n"
-    "  --tol T                per-iteration mode: stop a pair when\n"
-    "                         CP = | ||phi^n - phi_T|| - ||phi^(n-1) - phi_T|| | <= T\n"
-    "                         (default 0.25; the norm is over all cells, so CP grows\n"
-    "                         with the square root of the cell count: scale T with it;\n"
-    "                         a pair next to an empty slice stops when the shape vanishes)\n"
-    "  --max-iter N           most solver steps per morph (default 100000); a gap runs\n"
-    "                         two, A -> B and B -> A (one with --per-iteration)\n"
-    "  --interp linear|cubic  z-profile through the slices (default cubic): cubic adds to\n"
-    "                         each gap's morph the departure of a monotone cubic (PCHIP)\n"
-    "                         through the four nearest slices from the straight line,\n"
-    "                         so surfaces are C1 across the slices inside an object,\n"
-    "                         without overshoot\n"
-    "  --ends auto|tip|halfway  where an object meets an empty slice (cubic profile):\n"
-    "                         tip keeps a shrinking tip past mid-gap up to the empty slice,\n"
-    "                         right when the object reaches close to it (a stack cut one\n"
-    "                         slice beyond the object); halfway draws nothing past mid-gap,\n"
-    "                         right when the true end may lie anywhere in the gap (slices\n"
-    "                         placed independently of the object); auto (default): tip\n"
-    "                         where the empty slice is the first or last slice given,\n"
-    "                         halfway where more slices lie beyond it (--interp linear\n"
-    "                         always ends at mid-gap)\n"
-    "  --align auto|hull|none hull: move each slice's convex-hull centroid to the image\n"
-    "                         centre before morphing and move intermediate slices back\n"
-    "                         along the line (or monotone cubic) through the centroids;\n"
-    "                         auto (default): hull for a pair only when the shape moved\n"
-    "                         rather than changed: little overlap in place (IoU < 1/2),\n"
-    "                         more once shifted, the shift of largest overlap nearer the\n"
-    "                         centroid shift than none, and the two alike at that shift\n"
-    "                         (solver/README.md, section 9); none: no alignment\n"
-    "  --rules-off NAME,...   switch rules off, for experiments ('lsmorph help rules')\n"
-    "\n";
+static const char *const input_names[] = {LSM_INPUT_LIST(LSM_ENUM_TEXT)};
+static const char *const values_names[] = {LSM_VALUES_LIST(LSM_ENUM_TEXT)};
+static const char *const nrrd_encoding_names[] = {LSM_NRRD_ENCODING_LIST(LSM_ENUM_TEXT)};
+static const char *const method_names[] = {LSM_METHOD_LIST(LSM_ENUM_TEXT)};
+static const char *const scheme_names[] = {LSM_SCHEME_LIST(LSM_ENUM_TEXT)};
+static const char *const time_names[] = {LSM_TIME_LIST(LSM_ENUM_TEXT)};
+static const char *const interp_names[] = {LSM_INTERP_LIST(LSM_ENUM_TEXT)};
+static const char *const ends_names[] = {LSM_ENDS_LIST(LSM_ENUM_TEXT)};
+static const char *const align_names[] = {LSM_ALIGN_LIST(LSM_ENUM_TEXT)};
+static const char *const backend_names[] = {LSM_BACKEND_TABLE(LSM_BACKEND_NAME) "auto"};
 
-static const char reconstruct_help_running[] =
-    "Running:\n"
-    "  --threads N            threads, 1 .. 4096 (default: all cores): gaps side by\n"
-    "                         side for slices up to 1024^2 (any size with --backend\n"
-    "                         opencl), as many as their waiting output slices fit in\n"
-    "                         512 MiB; else inside a gap\n"
-    "  --backend c|opencl|auto  where the grid work runs (default c, the reference);\n"
-    "                         auto: OpenCL when a device is present, else C\n"
-    "  --device N             OpenCL device index from 'lsmorph devices', 0 .. 1000\n"
-    "                         (default: the first GPU listed, else device 0)\n"
-    "  -q, --quiet            no progress or notes on stderr (errors still)\n"
-    "\n";
+LSM_NAME_FUNCTIONS(lsm_nrrd_encoding, LSM_NRRD_ENCODING_LIST, lsm_nrrd_encoding_name,
+                   lsm_nrrd_encoding_from_name)
 
-/* (several strings: one would pass the 4095 characters C compilers must support) */
-static const char reconstruct_help_files[] =
-    "Files written to OUT_DIR:\n"
-    "  volume.nrrd            float32 signed distance (negative inside) of every output\n"
-    "                         slice, x fastest, spacings in physical units: exact at\n"
-    "                         the input slices, between them the interpolated level\n"
-    "                         set (zero on the surface, close to a distance near it)\n"
-    "  volume.mha             the same as MetaImage (--format mha; header + data in\n"
-    "                         one file, little endian)\n"
-    "  volume.vtk             the same as legacy VTK STRUCTURED_POINTS (--format vtk;\n"
-    "                         binary, big endian as the format requires)\n"
-    "  volume.nii             the same as NIfTI-1 (--format nii; one file, little\n"
-    "                         endian, at most 32767 samples along each axis): its\n"
-    "                         affine is diag(-sx, -sy, sz) in NIfTI's RAS world, so\n"
-    "                         3D Slicer and ITK place it where they place volume.nrrd\n"
-    "  volume.nii.gz          the same, gzip compressed (--format nii.gz; on the bunny\n"
-    "                         masks shrink 48x, signed distances 1.3x to 3.8x)\n"
-    "  exr/00001.exr ...      one single-channel (Y) OpenEXR file per slice (--format\n"
-    "                         exr): float32, or half 1/0 with --values mask; header\n"
-    "                         attributes pixelSize, sliceHeight\n"
-    "  volume.raw, volume.json  headerless little-endian samples and a JSON sidecar\n"
-    "                         with sizes, spacing, origin, dtype (--format raw)\n"
-    "                         All volumes carry spacing and origin (the centre of the\n"
-    "                         first sample) in physical units.\n"
-    "  surface.ply            (--mesh) binary little-endian PLY of the surface\n"
-    "                         phi = 0 (marching tetrahedra, closed and manifold;\n"
-    "                         x = column * pixel width, y = row * pixel height,\n"
-    "                         z = height;\n"
-    "                         outward normals)\n"
-    "  preview.png            up to 16 evenly spaced slices (input slices framed in\n"
-    "                         orange)\n"
-    "  preview3d.png          a shaded rendering of the surface\n"
-    "  heights.txt            the height of each output slice, one per line\n"
-    "  slices/00001.png ...   binary mask of each output slice (255 inside: phi < 0;\n"
-    "                         no sample is exactly 0)\n"
-    "  run.json               options, per-pair iterations, dt, CP, seconds, cells; totals\n"
-    "\n"
-    "Exit status: 0 success, 1 bad input or failure, 2 usage error, 130 / 143 / 129\n"
-    "interrupted by SIGINT / SIGTERM / SIGHUP (the process ends by that signal).\n"
-    "Results are written to a temporary folder OUT_DIR.tmp-XXXXXX next to OUT_DIR and\n"
-    "moved into place only when complete; on any failure or interruption it is\n"
-    "removed and an earlier OUT_DIR is left as it was.  An existing OUT_DIR is replaced\n"
-    "only when it is empty or an earlier result (it has a run.json).\n";
+/* names[0 .. count-1] joined by sep into out (cut short if it does not fit). */
+static void join_names(char *out, size_t size, const char *const *names, int count,
+                       const char *sep) {
+  size_t used = 0;
+  out[0] = '\0';
+  for (int k = 0; k < count && used < size; ++k) {
+    const int n = snprintf(out + used, size - used, "%s%s", k ? sep : "", names[k]);
+    if (n < 0) break;
+    used += (size_t)n;
+  }
+}
 
-static const char score_help[] =
-    "Usage: lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
-    "\n"
-    "Scores a reconstruction made from some of the slices of TRUTH_DIR (a full\n"
-    "stack, in natural order) against the slices left out between them.  Which\n"
-    "slices were the inputs:\n"
-    "  --stride K   every K-th (K >= 2), from the first input (below):\n"
-    "               reconstructed with --spacing K and the default --dz and\n"
-    "               --pixel-size (or with --heights-from-names on slices kept under\n"
-    "               their own numbers)\n"
-    "  (none)       where OUT_DIR/run.json's input heights put them: each input\n"
-    "               lies as many truth slices above the first as its height lies\n"
-    "               output steps (--dz) above the first's.  For any kept slices,\n"
-    "               evenly or not, reconstructed with --dz equal to the truth's\n"
-    "               slice spacing (--heights-from-names on slices kept under\n"
-    "               their numbers in the truth: 1 apart by default)\n"
-    "  --first N    the first input is truth slice N; the slices before it are\n"
-    "               not scored.  Without it: the truth slice whose file name is\n"
-    "               the first input's, when every input is named as the truth\n"
-    "               slice it lies at (run.json's input.files; slices kept under\n"
-    "               their own names, a note says so), else truth slice 1\n"
-    "The n-th file of OUT_DIR/slices (00001.png, 00002.png, ...) is compared with\n"
-    "the n-th truth slice counted from the first input, for every one that was\n"
-    "not an input, up to the last input (nothing is extrapolated past it; a note\n"
-    "names the truth slices beyond it, which are not scored).  Prints one JSON\n"
-    "object (distances in pixel widths, a row step counting run.json's\n"
-    "pixel_size_y / pixel_size of them; symmetric, between boundary pixels):\n"
-    "  held_out         slices scored\n"
-    "  dice_volume      Dice pooled over all held-out slices\n"
-    "  dice             mean Dice per slice\n"
-    "  hd95             mean 95 % Hausdorff distance over the slices non-empty on\n"
-    "                   both sides (slices empty on both sides have no boundary\n"
-    "                   and are left out of it and of mean_surface)\n"
-    "  hd95_pooled      95 % Hausdorff distance over all boundary pixels pooled; a\n"
-    "                   slice empty on one side only counts the image size for each\n"
-    "                   of its boundary pixels\n"
-    "  mean_surface     mean surface distance over the slices non-empty on both sides\n"
-    "  volume_error     (result - truth) / truth volume over the held-out slices\n"
-    "  one_sided_empty  held-out slices empty on one side only\n"
-    "  slices           with --per-slice: one object per held-out slice, in order:\n"
-    "                   truth (its number, from 1), file, between (the truth\n"
-    "                   numbers of the inputs below and above it), dice, hd95,\n"
-    "                   mean_surface (null unless non-empty on both sides),\n"
-    "                   area_result, area_truth (pixels)\n"
-    "A score that is undefined is null: the distances where no slice has a boundary,\n"
-    "the volume error where the truth is empty.\n"
-    "The folders come in that order: TRUTH_DIR has no run.json, OUT_DIR has one.\n"
-    "A result that does not fit TRUTH_DIR and its inputs is refused: its slices\n"
-    "must run from the first input to the last, one truth slice apart, with\n"
-    "--stride its run.json must count the kept slices (input.slices), and every\n"
-    "input must come back exactly.  (Slices written by another tool, with no\n"
-    "run.json, need --stride and are scored without the count's check.)  Truth\n"
-    "stored as 0/1 label masks is read as reconstruct reads them, the rule decided\n"
-    "over the kept slices.\n";
+/* ---- help ---------------------------------------------------------------------------- */
 
-static const char devices_help[] =
-    "Usage: lsmorph devices\n"
-    "\n"
-    "Lists the OpenCL platforms and devices this machine offers, one index each, with\n"
-    "name, type, version, compute units and global memory.  'reconstruct --backend\n"
-    "opencl --device N' runs on device N; without --device, on the first GPU listed,\n"
-    "else on device 0.  Exits 1 when OpenCL is not available (no ICD loader or no\n"
-    "platform).\n";
+/* One line of an option list: the option and its value (a choice shows its
+ * names, a|b|c), then what it does; '\n' in text starts a continuation line.
+ * A row without an option is a heading. */
+typedef struct help_row {
+  const char *option;
+  const char *const *choices;
+  int n_choices;
+  const char *text;
+  int formats; /* the text ends with the --format names */
+} help_row;
+
+#define HEAD(text) {NULL, NULL, 0, text, 0}
+#define OPT(option, text) {option, NULL, 0, text, 0}
+#define CHOOSE(option, names, text) {option, names, COUNT_OF(names), text, 0}
+
+/* The text column: option and value take columns 0 .. 24. */
+enum { HELP_INDENT = 25 };
+
+static const help_row reconstruct_rows[] = {
+    HEAD("Input:"),
+    OPT("-o, --output OUT_DIR", "the folder to write (replaced only when complete)"),
+    CHOOSE("--input", input_names, "filled regions (default), or thin closed contours\n"
+                                   "(inside by parity: nested contours, holes)"),
+    OPT("--invert", "foreground is dark (default: luminance >= 50 %;\n"
+                    "0/1 label masks: non-zero)"),
+    OPT("--spacing Z", "distance between consecutive slices (default 1)"),
+    OPT("--heights FILE", "one height per slice, strictly increasing"),
+    OPT("--heights-from-names", "each height is the number the file name ends\n"
+                                "with times --spacing (001.png 009.png ...)"),
+    OPT("--pixel-size S|SX,SY", "pixel size, or width and height (default 1);\n"
+                                "every length is in this unit"),
+    OPT("--max-pixels N", "refuse larger slices (default 268435456 = 2^28)"),
+    OPT("--max-voxels N", "refuse larger volumes (default 17179869184 = 2^34)"),
+    HEAD("Output:"),
+    OPT("--dz Z", "output slice spacing (default: the pixel size)"),
+    OPT("--per-iteration", "every solver iteration is a slice (the design\n"
+                           "document's mode; linear profile)"),
+    {"--format LIST", NULL, 0, "volume formats, comma separated (default nrrd):", 1},
+    CHOOSE("--values", values_names, "float32 signed distance (default) or uint8 mask"),
+    CHOOSE("--nrrd-encoding", nrrd_encoding_names, "volume.nrrd's samples raw (default) or gzipped"),
+    OPT("--mesh", "also write surface.ply, a closed mesh of phi = 0"),
+    OPT("--no-slices", "do not write slices/00001.png ..."),
+    OPT("--no-preview", "do not write preview.png and preview3d.png"),
+    HEAD("Method:"),
+    CHOOSE("--method", method_names, "ls: level-set morph (default); pls: ls\n"
+                                     "corrected by Lagrangian particles; blend:\n"
+                                     "linear blend of the two signed distances"),
+    CHOOSE("--interp", interp_names, "z-profile through the slices (default cubic:\n"
+                                     "a monotone cubic through the four nearest)"),
+    CHOOSE("--ends", ends_names, "where an object meets an empty slice: a tip\n"
+                                 "that reaches it (tip) or nothing past mid-gap\n"
+                                 "(halfway); default auto: tip beside the first\n"
+                                 "and last slice given, halfway elsewhere"),
+    CHOOSE("--align", align_names, "move slices by their convex-hull centroids:\n"
+                                   "pairs whose shape moved (auto, the default),\n"
+                                   "every pair (hull), or none"),
+    OPT("--rules-off NAME,...", "switch reconstruction rules off, for experiments\n"
+                               "('lsmorph help rules' lists them)"),
+    CHOOSE("--scheme", scheme_names, "numerical Hamiltonian\n"
+                                     "(default upwind; weno5 with --time rk3)"),
+    CHOOSE("--time", time_names, "time integrator (default euler)"),
+    OPT("--cfl C", "CFL number (default 0.75; monotone up to 1)"),
+    OPT("--max-iter N", "most solver steps per morph (default 100000)"),
+    OPT("--reinit-every N", "reinitialise phi every N steps (default 0: never)"),
+    OPT("--reinit-iters N", "iterations per reinitialisation (default 10)"),
+    OPT("--tol T", "--per-iteration: a pair stops when CP <= T\n"
+                   "(default 0.25)"),
+    OPT("--particles-per-cell N", "pls: particles per band cell, 2 .. 256 (default 16)"),
+    OPT("--pls-reseed N", "pls: reseed every N steps (default 0: never)"),
+    OPT("--pls-radius-adjust", "pls: reset particle radii after each correction"),
+    OPT("--seed N", "pls: random seed (default 20130101)"),
+    HEAD("Running:"),
+    OPT("--threads N", "threads (default: all cores)"),
+    CHOOSE("--backend", backend_names, "where the grid work runs (default c;\n"
+                                       "auto: OpenCL when a device is present)"),
+    OPT("--device N", "OpenCL device of 'lsmorph devices' (default: the\n"
+                      "first GPU, else 0)"),
+    OPT("-q, --quiet", "no progress or notes on stderr (errors still)"),
+};
+
+static void print_row(FILE *f, const help_row *row) {
+  if (!row->option) {
+    fprintf(f, "\n%s\n", row->text);
+    return;
+  }
+  char choices[128] = "";
+  if (row->choices) join_names(choices, sizeof choices, row->choices, row->n_choices, "|");
+  const int width =
+      fprintf(f, "  %s%s%s", row->option, row->choices ? " " : "", choices);
+  /* the text in its column, or two spaces after a long option */
+  fprintf(f, "%*s", width < HELP_INDENT - 1 ? HELP_INDENT - width : 2, "");
+  for (const char *line = row->text; line;) {
+    const char *end = strchr(line, '\n');
+    fprintf(f, "%.*s\n", end ? (int)(end - line) : (int)strlen(line), line);
+    line = end ? end + 1 : NULL;
+    if (line) fprintf(f, "%*s", HELP_INDENT, "");
+  }
+  if (row->formats) {
+    fprintf(f, "%*s", HELP_INDENT, "");
+    for (unsigned bit = 1, n = 0; bit <= LSM_FORMAT_ALL; bit <<= 1)
+      if (LSM_FORMAT_ALL & bit) fprintf(f, "%s%s", n++ ? ", " : "", lsm_format_name(bit));
+    fputc('\n', f);
+  }
+}
+
+static void reconstruct_help(FILE *f) {
+  fputs("Usage: lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
+        "\n"
+        "Reads the PNG and TIFF slices of SLICE_DIR in natural order (2.png before\n"
+        "10.png), morphs each slice into the next by level sets, and writes the stack\n"
+        "to OUT_DIR.  An object closes where it meets an empty slice: keep one beyond\n"
+        "each end.  Options also take the form --name=value; after '--' every argument\n"
+        "is SLICE_DIR.  README.md tabulates the options; solver/README.md explains the\n"
+        "method, io/README.md the files.\n",
+        f);
+  for (int k = 0; k < COUNT_OF(reconstruct_rows); ++k) print_row(f, &reconstruct_rows[k]);
+  fputs("\n"
+        "OUT_DIR gets volume.nrrd (or the --format files), heights.txt, slices/,\n"
+        "preview.png, preview3d.png, surface.ply (--mesh) and run.json.  They are\n"
+        "written to OUT_DIR.tmp-XXXXXX and moved into place when complete; an existing\n"
+        "OUT_DIR is replaced only when it is empty or an earlier result (a run.json).\n"
+        "Exit status: 0 success, 1 bad input or failure, 2 usage error; SIGINT, SIGTERM,\n"
+        "SIGHUP end the run by that signal (130, 143, 129) and write nothing.\n",
+        f);
+}
+
+static void score_help(FILE *f) {
+  fputs("Usage: lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
+        "\n"
+        "Scores a reconstruction made from some slices of TRUTH_DIR (a full stack, in\n"
+        "natural order) against the slices held out between its first and last input,\n"
+        "and prints one line of JSON.  Which truth slices were the inputs:\n"
+        "  --stride K     every K-th (K >= 2), reconstructed with --spacing K\n"
+        "  (no --stride)  where OUT_DIR/run.json's input heights put them, reconstructed\n"
+        "                 with --dz equal to the truth's slice spacing\n"
+        "  --first N      the first input is truth slice N (default: the truth slice\n"
+        "                 named as the first input, else slice 1)\n"
+        "  --per-slice    also print each held-out slice's scores\n"
+        "\n"
+        "Printed: held_out, dice_volume (Dice pooled), dice (mean per slice), hd95,\n"
+        "hd95_pooled, mean_surface (distances in pixel widths), volume_error,\n"
+        "one_sided_empty; with --per-slice, slices.  An undefined score is null.  A\n"
+        "result that does not fit TRUTH_DIR and its inputs is refused.  Details:\n"
+        "validation/README.md, section Scoring.\n",
+        f);
+}
+
+static void devices_help(FILE *f) {
+  fputs("Usage: lsmorph devices\n"
+        "\n"
+        "Lists the OpenCL platforms and devices of this machine, one index each, with\n"
+        "name, type, version, compute units and global memory.  'reconstruct --backend\n"
+        "opencl --device N' runs on device N; without --device, on the first GPU\n"
+        "listed, else on device 0.  Exits 1 when OpenCL is not available (no ICD loader\n"
+        "or no platform).\n",
+        f);
+}
+
+/* The help topics: `lsmorph help TOPIC`. */
+typedef struct help_topic {
+  const char *name;
+  void (*print)(FILE *f);
+} help_topic;
+
+static const help_topic help_topics[] = {
+    {"fill", lsm_fill_help},
+    {"reconstruct", reconstruct_help},
+    {"score", score_help},
+    {"devices", devices_help},
+    {"rules", lsm_rules_print},
+};
+
+static const help_topic *find_topic(const char *name) {
+  for (int k = 0; name && k < COUNT_OF(help_topics); ++k)
+    if (strcmp(name, help_topics[k].name) == 0) return &help_topics[k];
+  return NULL;
+}
+
+/* The topics' names joined by sep, each after prefix: "fill, reconstruct, ..."
+ * or "help fill, help reconstruct, ...". */
+static void topic_list(char *out, size_t size, const char *prefix, const char *sep) {
+  const char *names[COUNT_OF(help_topics)];
+  char with_prefix[COUNT_OF(help_topics)][32];
+  for (int k = 0; k < COUNT_OF(help_topics); ++k) {
+    snprintf(with_prefix[k], sizeof with_prefix[k], "%s%s", prefix, help_topics[k].name);
+    names[k] = with_prefix[k];
+  }
+  join_names(out, size, names, COUNT_OF(help_topics), sep);
+}
+
+static void general_help(FILE *f) {
+  char topics[128];
+  topic_list(topics, sizeof topics, "", ", ");
+  fprintf(f,
+          "lsmorph " LSM_VERSION " - fill the gaps between sparse slices by level-set morphing\n"
+          "\n"
+          "Usage:\n"
+          "  lsmorph fill LABELS -o OUT [options]   (label volumes: .nii, .nii.gz, .nrrd)\n"
+          "  lsmorph reconstruct SLICE_DIR -o OUT_DIR [options]\n"
+          "  lsmorph score TRUTH_DIR OUT_DIR [--stride K] [--first N] [--per-slice]\n"
+          "  lsmorph devices\n"
+          "  lsmorph --help [TOPIC] | --version | help TOPIC\n"
+          "\n"
+          "Commands:\n"
+          "  fill          fill the slices between the drawn slices of a NIfTI or NRRD\n"
+          "                label map, every label at once\n"
+          "  reconstruct   read PNG or TIFF slices, morph between consecutive slices,\n"
+          "                write a volume\n"
+          "  score         compare a reconstruction with full-resolution truth slices\n"
+          "  devices       list the OpenCL platforms and devices\n"
+          "\n"
+          "Help topics: %s.\n"
+          "Run 'lsmorph help reconstruct' for the options.  Every option also takes the\n"
+          "form --name=value; after '--' every argument is a folder (for names that\n"
+          "start with '-').\n",
+          topics);
+}
 
 void lsm_cli_help(FILE *f, const char *topic) {
-  if (topic && strcmp(topic, "reconstruct") == 0) {
-    fputs(reconstruct_help, f);
-    fputs(reconstruct_help_output, f);
-    fputs(reconstruct_help_method, f);
-    fputs(reconstruct_help_running, f);
-    fputs(reconstruct_help_files, f);
-  }
-  else if (topic && strcmp(topic, "score") == 0)
-    fputs(score_help, f);
-  else if (topic && strcmp(topic, "devices") == 0)
-    fputs(devices_help, f);
-  else if (topic && strcmp(topic, "rules") == 0)
-    lsm_rules_print(f);
+  const help_topic *t = find_topic(topic);
+  if (t)
+    t->print(f);
   else
-    fputs(general_help, f);
+    general_help(f);
 }
 
 /* ---- value parsers ---------------------------------------------------------------- */
@@ -391,6 +356,7 @@ static lsm_status parse_int(const char *opt, const char *text, long min, long ma
   return LSM_OK;
 }
 
+
 /* ---- the parser ---------------------------------------------------------------------- */
 
 typedef struct arg_cursor {
@@ -411,6 +377,33 @@ static lsm_status take_value(arg_cursor *c, const char *opt, const char *inline_
   return LSM_OK;
 }
 
+/* A choice: the index of text in names (its enum's value), or an error that
+ * lists the names. */
+static lsm_status parse_choice(const char *opt, const char *text, const char *const *names,
+                               int count, int *out, lsm_err *err) {
+  const int k = lsm_name_index(names, count, text);
+  if (k < 0) {
+    char list[256];
+    join_names(list, sizeof list, names, count, ", ");
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: '%s' is not one of %s", opt, text, list);
+  }
+  *out = k;
+  return LSM_OK;
+}
+
+/* --seed: any 64-bit unsigned value, digits only. */
+static lsm_status parse_seed(const char *text, uint64_t *out, lsm_err *err) {
+  char *end = NULL;
+  errno = 0;
+  const unsigned long long seed = isdigit((unsigned char)text[0]) ? strtoull(text, &end, 10) : 0;
+  if (!end || *end != '\0')
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--seed: '%s' is not a whole number", text);
+  if (errno == ERANGE || seed > UINT64_MAX)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--seed: %s is out of range [0, 2^64 - 1]", text);
+  *out = (uint64_t)seed;
+  return LSM_OK;
+}
+
 static void cli_defaults(lsm_cli *cli) {
   memset(cli, 0, sizeof *cli);
   cli->spacing = 1.0;
@@ -419,8 +412,10 @@ static void cli_defaults(lsm_cli *cli) {
   cli->write_slices = 1;
   cli->formats = LSM_FORMAT_NRRD;
   cli->values = LSM_VALUES_SDF;
+  cli->nrrd_encoding = LSM_NRRD_RAW;
   cli->mesh = 0;
   cli->preview = 1;
+  cli->backend = "c";
   cli->device = -1; /* the first GPU, else the first device */
   lsm_stack_opts_default(&cli->stack);
 }
@@ -432,13 +427,91 @@ static const char *listed(const char *name, const char *const *list) {
   return NULL;
 }
 
+/* One option of reconstruct, `name` as given (before any "=value"); *value
+ * is set when the option took a value. */
+static lsm_status reconstruct_option(arg_cursor *c, const char *name, const char *inline_value,
+                                     const char **value, lsm_cli *cli, lsm_err *err) {
+  lsm_stack_opts *so = &cli->stack;
+  const char *v = NULL;
+  long n = 0;
+  int k = 0;
+#define IS(s) (strcmp(name, (s)) == 0)
+#define VALUE() LSM_TRY(take_value(c, name, inline_value, &v, err))
+#define CHOICE(names, field)                                                  \
+  do {                                                                        \
+    VALUE();                                                                  \
+    LSM_TRY(parse_choice(name, v, names, COUNT_OF(names), &k, err));          \
+    field = k;                                                                \
+  } while (0)
+#define INT(min, max, field)                                                  \
+  do {                                                                        \
+    VALUE();                                                                  \
+    LSM_TRY(parse_int(name, v, min, max, &n, err));                           \
+    field = (int)n;                                                           \
+  } while (0)
+#define TEXT(field) do { VALUE(); field = v; } while (0)
+#define CALL(parse) do { VALUE(); LSM_TRY(parse); } while (0)
+  if (IS("-o") || IS("--output")) TEXT(cli->out_dir);
+  else if (IS("--input")) CHOICE(input_names, so->input);
+  else if (IS("--invert")) cli->invert = 1;
+  else if (IS("--spacing")) CALL(parse_length(name, v, &cli->spacing, err));
+  else if (IS("--heights")) TEXT(cli->heights_file);
+  else if (IS("--heights-from-names")) cli->heights_from_names = 1;
+  else if (IS("--pixel-size")) CALL(parse_pixel_size(name, v, &so->pixel_dx, &so->pixel_dy, err));
+  else if (IS("--dz")) CALL(parse_length(name, v, &so->dz, err));
+  else if (IS("--per-iteration")) so->per_iteration = 1;
+  else if (IS("--no-slices")) cli->write_slices = 0;
+  else if (IS("--format")) CALL(lsm_format_list_parse(v, &cli->formats, err));
+  else if (IS("--values")) CHOICE(values_names, cli->values);
+  else if (IS("--nrrd-encoding")) CHOICE(nrrd_encoding_names, cli->nrrd_encoding);
+  else if (IS("--mesh")) cli->mesh = 1;
+  else if (IS("--no-preview")) cli->preview = 0;
+  else if (IS("--method")) CHOICE(method_names, so->method);
+  else if (IS("--scheme")) CHOICE(scheme_names, so->morph.scheme);
+  else if (IS("--time")) CHOICE(time_names, so->morph.time);
+  else if (IS("--cfl")) CALL(parse_double(name, v, &so->morph.cfl, 1, err));
+  else if (IS("--reinit-every")) INT(0, INT_MAX, so->morph.reinit_every);
+  else if (IS("--reinit-iters")) INT(1, 100000, so->morph.reinit_iters);
+  else if (IS("--tol")) CALL(parse_double(name, v, &so->tol, 1, err));
+  else if (IS("--max-iter")) INT(1, INT_MAX, so->max_iter);
+  else if (IS("--particles-per-cell")) INT(2, 256, so->morph.pls.particles_per_cell);
+  else if (IS("--pls-reseed")) INT(0, INT_MAX, so->morph.pls.reseed_every);
+  else if (IS("--pls-radius-adjust")) so->morph.pls.radius_adjust = 1;
+  else if (IS("--seed")) CALL(parse_seed(v, &so->morph.pls.seed, err));
+  else if (IS("--backend")) {
+    int row = 0;
+    CHOICE(backend_names, row);
+    cli->backend = backend_names[row];
+  }
+  else if (IS("--device")) INT(0, 1000, cli->device);
+  else if (IS("--interp")) CHOICE(interp_names, so->interp);
+  else if (IS("--ends")) CHOICE(ends_names, so->ends);
+  else if (IS("--align")) CHOICE(align_names, so->align);
+  else if (IS("--rules-off")) CALL(lsm_rules_switch_off(&so->rules, v, err));
+  else if (IS("--threads")) INT(1, 4096, cli->threads);
+  else if (IS("--max-pixels")) CALL(parse_count(name, v, "pixels", &cli->max_pixels, err));
+  else if (IS("--max-voxels")) CALL(parse_count(name, v, "voxels", &cli->max_voxels, err));
+  else if (IS("-q") || IS("--quiet")) cli->quiet = 1;
+  else
+    return lsm_fail(err, LSM_ERR_USAGE, NULL,
+                    "unknown option '%s' (see 'lsmorph help reconstruct')", c->argv[c->i]);
+#undef IS
+#undef VALUE
+#undef CHOICE
+#undef INT
+#undef TEXT
+#undef CALL
+  *value = v;
+  return LSM_OK;
+}
+
 static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   static const char *const solver_options[] = {"--scheme",   "--time",         "--cfl",
                                                "--max-iter", "--reinit-every", "--reinit-iters",
                                                NULL};
   static const char *const pls_options[] = {"--particles-per-cell", "--pls-reseed",
                                             "--pls-radius-adjust", "--seed", NULL};
-  lsm_stack_opts *so = &cli->stack;
+  const lsm_stack_opts *so = &cli->stack;
   int options = 1; /* until "--": after it every argument is SLICE_DIR */
   for (; c->i < c->argc; ++c->i) {
     const char *arg = c->argv[c->i];
@@ -452,167 +525,30 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
       cli->slice_dir = arg;
       continue;
     }
-    /* Split "--name=value". */
+    /* split "--name=value" */
     char name[64];
     const char *eq = strchr(arg, '=');
-    const char *inline_value = NULL;
-    size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+    const size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
     if (len >= sizeof name) return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s'", arg);
     memcpy(name, arg, len);
     name[len] = '\0';
-    if (eq) inline_value = eq + 1;
-    const char *v = NULL;
-    long n;
-#define NEEDS_VALUE() LSM_TRY(take_value(c, name, inline_value, &v, err))
-#define IS(s) (strcmp(name, (s)) == 0)
-    if (IS("-h") || IS("--help")) {
+    if (strcmp(name, "-h") == 0 || strcmp(name, "--help") == 0) {
       cli->command = LSM_CMD_HELP;
       cli->help_topic = "reconstruct";
       return LSM_OK;
-    } else if (IS("-o") || IS("--output")) {
-      NEEDS_VALUE();
-      cli->out_dir = v;
-    } else if (IS("--input")) {
-      NEEDS_VALUE();
-      if ((so->input = lsm_input_from_name(v)) == LSM_INPUT_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--input: '%s' is not one of mask, outline", v);
-    } else if (IS("--invert")) {
-      cli->invert = 1;
-    } else if (IS("--spacing")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_length(name, v, &cli->spacing, err));
-    } else if (IS("--heights")) {
-      NEEDS_VALUE();
-      cli->heights_file = v;
-    } else if (IS("--heights-from-names")) {
-      cli->heights_from_names = 1;
-    } else if (IS("--pixel-size")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_pixel_size(name, v, &so->pixel_dx, &so->pixel_dy, err));
-    } else if (IS("--dz")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_length(name, v, &so->dz, err));
-    } else if (IS("--per-iteration")) {
-      so->per_iteration = 1;
-    } else if (IS("--no-slices")) {
-      cli->write_slices = 0;
-    } else if (IS("--format")) {
-      NEEDS_VALUE();
-      LSM_TRY(lsm_format_list_parse(v, &cli->formats, err));
-    } else if (IS("--values")) {
-      NEEDS_VALUE();
-      if ((cli->values = lsm_values_from_name(v)) == LSM_VALUES_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--values: '%s' is not one of sdf, mask", v);
-    } else if (IS("--nrrd-encoding")) {
-      NEEDS_VALUE();
-      if (strcmp(v, "raw") != 0 && strcmp(v, "gzip") != 0)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--nrrd-encoding: '%s' is not one of raw, gzip", v);
-      cli->nrrd_gzip = strcmp(v, "gzip") == 0;
-      cli->nrrd_encoding_given = 1;
-    } else if (IS("--mesh")) {
-      cli->mesh = 1;
-    } else if (IS("--no-preview")) {
-      cli->preview = 0;
-    } else if (IS("--method")) {
-      NEEDS_VALUE();
-      if ((so->method = lsm_method_from_name(v)) == LSM_METHOD_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--method: '%s' is not one of ls, pls, blend", v);
-    } else if (IS("--scheme")) {
-      NEEDS_VALUE();
-      if ((so->morph.scheme = lsm_scheme_from_name(v)) == LSM_SCHEME_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--scheme: '%s' is not one of upwind, roe-fix, weno5", v);
-    } else if (IS("--time")) {
-      NEEDS_VALUE();
-      if ((so->morph.time = lsm_time_from_name(v)) == LSM_TIME_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--time: '%s' is not one of euler, rk2, rk3", v);
-    } else if (IS("--cfl")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_double(name, v, &so->morph.cfl, 1, err));
-    } else if (IS("--reinit-every")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 0, INT_MAX, &n, err));
-      so->morph.reinit_every = (int)n;
-    } else if (IS("--reinit-iters")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 1, 100000, &n, err));
-      so->morph.reinit_iters = (int)n;
-    } else if (IS("--tol")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_double(name, v, &so->tol, 1, err));
-    } else if (IS("--max-iter")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 1, INT_MAX, &n, err));
-      so->max_iter = (int)n;
-    } else if (IS("--particles-per-cell")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 2, 256, &n, err));
-      so->morph.pls.particles_per_cell = (int)n;
-    } else if (IS("--pls-reseed")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 0, INT_MAX, &n, err));
-      so->morph.pls.reseed_every = (int)n;
-    } else if (IS("--pls-radius-adjust")) {
-      so->morph.pls.radius_adjust = 1;
-    } else if (IS("--seed")) {
-      NEEDS_VALUE();
-      /* any 64-bit unsigned value: digits only */
-      char *end = NULL;
-      errno = 0;
-      const unsigned long long seed = isdigit((unsigned char)v[0]) ? strtoull(v, &end, 10) : 0;
-      if (!end || *end != '\0')
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--seed: '%s' is not a whole number", v);
-      if (errno == ERANGE || seed > UINT64_MAX)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--seed: %s is out of range [0, 2^64 - 1]", v);
-      so->morph.pls.seed = (uint64_t)seed;
-    } else if (IS("--backend")) {
-      NEEDS_VALUE();
-      if ((cli->backend = lsm_backend_kind_from_name(v)) == LSM_BACKEND_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--backend: '%s' is not one of c, opencl, auto", v);
-    } else if (IS("--device")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 0, 1000, &n, err));
-      cli->device = (int)n;
-    } else if (IS("--interp")) {
-      NEEDS_VALUE();
-      cli->interp_given = 1;
-      if ((so->interp = lsm_interp_from_name(v)) == LSM_INTERP_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--interp: '%s' is not one of linear, cubic", v);
-    } else if (IS("--ends")) {
-      NEEDS_VALUE();
-      cli->ends_given = 1;
-      if ((so->ends = lsm_end_rule_from_name(v)) == LSM_ENDS_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--ends: '%s' is not one of auto, tip, halfway", v);
-    } else if (IS("--align")) {
-      NEEDS_VALUE();
-      if ((so->align = lsm_align_from_name(v)) == LSM_ALIGN_UNKNOWN)
-        return lsm_fail(err, LSM_ERR_USAGE, NULL, "--align: '%s' is not one of auto, hull, none", v);
-    } else if (IS("--rules-off")) {
-      NEEDS_VALUE();
-      LSM_TRY(lsm_rules_switch_off(&so->rules, v, err));
-    } else if (IS("--threads")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_int(name, v, 1, 4096, &n, err));
-      cli->threads = (int)n;
-    } else if (IS("--max-pixels")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_count(name, v, "pixels", &cli->max_pixels, err));
-    } else if (IS("--max-voxels")) {
-      NEEDS_VALUE();
-      LSM_TRY(parse_count(name, v, "voxels", &cli->max_voxels, err));
-    } else if (IS("-q") || IS("--quiet")) {
-      cli->quiet = 1;
-    } else {
-      return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown option '%s' (see 'lsmorph help reconstruct')", arg);
     }
+    const char *inline_value = eq ? eq + 1 : NULL, *v = NULL;
+    LSM_TRY(reconstruct_option(c, name, inline_value, &v, cli, err));
     if (inline_value && !v)
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes no value", name);
     if (!cli->solver_option) cli->solver_option = listed(name, solver_options);
     if (!cli->pls_option) cli->pls_option = listed(name, pls_options);
-    cli->tol_given |= IS("--tol");
-    cli->device_given |= IS("--device");
-    cli->spacing_given |= IS("--spacing");
-#undef NEEDS_VALUE
-#undef IS
+    cli->tol_given |= strcmp(name, "--tol") == 0;
+    cli->device_given |= strcmp(name, "--device") == 0;
+    cli->spacing_given |= strcmp(name, "--spacing") == 0;
+    cli->interp_given |= strcmp(name, "--interp") == 0;
+    cli->ends_given |= strcmp(name, "--ends") == 0;
+    cli->nrrd_encoding_given |= strcmp(name, "--nrrd-encoding") == 0;
   }
   if (!cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing SLICE_DIR");
   if (!cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing -o OUT_DIR");
@@ -672,6 +608,7 @@ static lsm_status parse_score(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
   return LSM_OK;
 }
 
+
 lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   cli_defaults(cli);
   if (argc < 2) return lsm_fail(err, LSM_ERR_USAGE, NULL, "no command (see 'lsmorph --help')");
@@ -681,12 +618,12 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   if (strcmp(cmd, "help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0) {
     cli->command = LSM_CMD_HELP;
     cli->help_topic = argc > 2 ? argv[2] : NULL;
-    if (cli->help_topic && strcmp(cli->help_topic, "reconstruct") != 0 &&
-        strcmp(cli->help_topic, "score") != 0 && strcmp(cli->help_topic, "devices") != 0 &&
-        strcmp(cli->help_topic, "rules") != 0)
-      return lsm_fail(err, LSM_ERR_USAGE, NULL,
-                      "%s: no command '%s' (help reconstruct, help score, help devices, help rules)",
-                      cmd, cli->help_topic);
+    if (cli->help_topic && !find_topic(cli->help_topic)) {
+      char topics[256];
+      topic_list(topics, sizeof topics, "help ", ", ");
+      return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s: no command '%s' (%s)", cmd, cli->help_topic,
+                      topics);
+    }
     if (argc > 3)
       return lsm_fail(err, LSM_ERR_USAGE, NULL, "%s takes one command at most, not '%s'", cmd,
                       argv[3]);
@@ -718,6 +655,7 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
   return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown command '%s' (see 'lsmorph --help')", cmd);
 }
 
+
 void lsm_cli_note_unused(const lsm_cli *cli, FILE *f) {
   if (cli->stack.per_iteration && cli->stack.dz > 0)
     fprintf(f, "lsmorph: note: --dz has no effect with --per-iteration (every solver "
@@ -741,7 +679,7 @@ void lsm_cli_note_unused(const lsm_cli *cli, FILE *f) {
   if (!cli->stack.per_iteration && cli->tol_given)
     fprintf(f, "lsmorph: note: --tol has no effect without --per-iteration (it stops "
                "each pair of that mode)\n");
-  if (cli->backend == LSM_BACKEND_C && cli->device_given)
+  if (strcmp(cli->backend, "c") == 0 && cli->device_given)
     fprintf(f, "lsmorph: note: --device has no effect with --backend c\n");
   if (cli->nrrd_encoding_given && !(cli->formats & LSM_FORMAT_NRRD))
     fprintf(f, "lsmorph: note: --nrrd-encoding has no effect without nrrd in --format\n");

@@ -1,13 +1,19 @@
-/* lsm_cli: the command line of lsmorph, parsed into plain options.
- * Kept apart from main() so tests and the fuzzer can drive it directly. */
+/* lsm_cli: the command line of lsmorph, parsed into plain options, and its
+ * help.  Kept apart from main() so tests and the fuzzer can drive it directly.
+ * Each option of reconstruct is one row of a table (lsm_cli.c) that both the
+ * parser and the help read; a choice's names come from its enum's list
+ * (solver/base/lsm_names.h). */
 #ifndef LSM_CLI_H
 #define LSM_CLI_H
 
 #include <stdint.h>
 #include <stdio.h>
 
-#include "solver/recon/lsm_stack.h"
+#include "io/lsm_io.h"
+#include "solver/base/lsm_names.h"
 #include "solver/base/lsm_status.h"
+#include "solver/pde/lsm_backend.h"
+#include "solver/recon/lsm_stack.h"
 
 #define LSM_VERSION "0.1.0"
 
@@ -20,9 +26,16 @@ typedef enum lsm_command {
   LSM_CMD_DEVICES
 } lsm_command;
 
+/* --nrrd-encoding; add new items at the end (lsm_names.h). */
+#define LSM_NRRD_ENCODING_LIST(X)                                               \
+  X(LSM_NRRD_RAW, "raw")   /* the samples as they are */                        \
+  X(LSM_NRRD_GZIP, "gzip") /* one gzip stream: NRRD's standard encoding gzip */
+LSM_ENUM(lsm_nrrd_encoding, LSM_NRRD, LSM_NRRD_ENCODING_LIST, lsm_nrrd_encoding_name,
+         lsm_nrrd_encoding_from_name);
+
 typedef struct lsm_cli {
   lsm_command command;
-  const char *help_topic;    /* subcommand whose help was asked, or NULL */
+  const char *help_topic;    /* topic whose help was asked, or NULL */
   /* reconstruct */
   const char *slice_dir;
   const char *out_dir;
@@ -35,11 +48,11 @@ typedef struct lsm_cli {
   uint64_t max_pixels;       /* per slice */
   uint64_t max_voxels;       /* output volume (checked as written with --per-iteration) */
   int write_slices;          /* PNG masks of every output slice */
-  lsm_backend_kind backend;  /* --backend (default c) */
+  const char *backend;       /* --backend NAME: a row of lsm_backend.h's table, or "auto" (default "c") */
   int device;                /* --device N (-1: first GPU, else first device) */
   unsigned formats;          /* --format: set of LSM_FORMAT_* bits (io/lsm_io.h) */
-  int values;                /* --values: LSM_VALUES_SDF or LSM_VALUES_MASK */
-  int nrrd_gzip;             /* --nrrd-encoding gzip (0: raw) */
+  lsm_values values;         /* --values */
+  lsm_nrrd_encoding nrrd_encoding;
   int nrrd_encoding_given;
   int mesh;                  /* --mesh: write surface.ply */
   int preview;               /* preview.png and preview3d.png (--no-preview: 0) */

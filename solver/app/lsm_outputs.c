@@ -48,10 +48,10 @@ lsm_status lsm_outputs_open(lsm_outputs *o, const lsm_cli *cli, const char *dir,
   o->dz = lsm_stack_output_dz(&cli->stack);
   const double pixel_dx = cli->stack.pixel_dx, pixel_dy = cli->stack.pixel_dy;
   /* --nrrd-encoding gzip: the writer's gzip NRRD in place of the raw one */
-  const unsigned formats = cli->nrrd_gzip && (cli->formats & LSM_FORMAT_NRRD)
+  const unsigned formats = cli->nrrd_encoding == LSM_NRRD_GZIP && (cli->formats & LSM_FORMAT_NRRD)
                                ? (cli->formats & ~LSM_FORMAT_NRRD) | LSM_FORMAT_NRRD_GZ
                                : cli->formats;
-  LSM_TRY(lsm_volume_writer_open(dir, formats, (lsm_values)cli->values, width, height, pixel_dx,
+  LSM_TRY(lsm_volume_writer_open(dir, formats, cli->values, width, height, pixel_dx,
                                  pixel_dy, o->dz, 0.0, 0.0, z0, &o->volume, err));
   /* the mesh caps an object cut by the first or last slice half a step beyond
    * it: dz, or with --per-iteration (uneven heights) the step to the

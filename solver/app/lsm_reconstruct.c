@@ -150,11 +150,13 @@ static lsm_status read_inputs(const lsm_cli *cli, lsm_slice_files *src, double *
 static lsm_status open_backend(lsm_cli *cli, int threads, lsm_backend **backend, lsm_err *err) {
   LSM_TRY(lsm_backend_open(cli->backend, cli->device, threads, backend, err));
   cli->stack.morph.backend = *backend;
-  if (!cli->quiet && cli->backend != LSM_BACKEND_C)
-    fprintf(stderr, "lsmorph: backend %s: %s\n", (*backend)->ops->name, (*backend)->device);
+  if (!cli->quiet && strcmp(cli->backend, "c") != 0)
+    fprintf(stderr, "lsmorph: backend %s: %s\n", lsm_backend_name(*backend),
+            lsm_backend_device(*backend));
   /* auto fell back to C: say why, also when a --device given does not exist */
-  if (!cli->quiet && (*backend)->fallback[0])
-    fprintf(stderr, "lsmorph: note: --backend auto runs on C: %s\n", (*backend)->fallback);
+  if (!cli->quiet && lsm_backend_fallback(*backend)[0])
+    fprintf(stderr, "lsmorph: note: --backend auto runs on C: %s\n",
+            lsm_backend_fallback(*backend));
   return LSM_OK;
 }
 

@@ -10,15 +10,23 @@
 
 static const char *json_bool(int value) { return value ? "true" : "false"; }
 
-/* "backend": where the grid work ran. */
+/* "backend": where the grid work ran: its name and the facts it reports (every backend:
+ * device, build_seconds, kernel_cache_hit). */
 static void write_backend(FILE *f, const lsm_backend *backend) {
   fputs("  \"backend\": {\"name\": ", f);
-  lsm_json_string(f, backend->ops->name);
-  fputs(", \"device\": ", f);
-  lsm_json_string(f, backend->device);
-  fputs(", \"build_seconds\": ", f);
-  lsm_json_number(f, backend->build_seconds);
-  fprintf(f, ", \"kernel_cache_hit\": %s},\n", json_bool(backend->kernel_cache_hit));
+  lsm_json_string(f, lsm_backend_name(backend));
+  lsm_backend_fact facts[LSM_BACKEND_FACTS_MAX];
+  const int n = lsm_backend_facts(backend, facts, LSM_BACKEND_FACTS_MAX);
+  for (int k = 0; k < n; ++k) {
+    fprintf(f, ", \"%s\": ", facts[k].key);
+    if (facts[k].kind == LSM_FACT_TEXT)
+      lsm_json_string(f, facts[k].text);
+    else if (facts[k].kind == LSM_FACT_NUMBER)
+      lsm_json_number(f, facts[k].number);
+    else
+      fputs(json_bool(facts[k].flag), f);
+  }
+  fputs("},\n", f);
 }
 
 /* "options": every option as the run used it. */
@@ -60,7 +68,7 @@ static void write_options(FILE *f, const lsm_run_record *run) {
   lsm_json_number(f, lsm_stack_output_dz(o));
   fprintf(f, ", \"invert\": %s, \"heights_from_names\": %s, \"threads\": %d, \"values\": ",
           json_bool(cli->invert), json_bool(cli->heights_from_names), run->threads);
-  lsm_json_string(f, lsm_values_name((lsm_values)cli->values));
+  lsm_json_string(f, lsm_values_name(cli->values));
   fputs(", \"formats\": [", f);
   int listed = 0;
   for (unsigned bit = 1; bit <= LSM_FORMAT_ALL; bit <<= 1) {
@@ -72,7 +80,7 @@ static void write_options(FILE *f, const lsm_run_record *run) {
   fprintf(f, "], \"nrrd_encoding\": \"%s\", \"mesh\": %s, \"preview\": %s, "
           "\"particles_per_cell\": %d, \"pls_reseed\": %d, \"pls_radius_adjust\": %s, "
           "\"seed\": %" PRIu64 "},\n",
-          cli->nrrd_gzip ? "gzip" : "raw", json_bool(cli->mesh),
+          lsm_nrrd_encoding_name(cli->nrrd_encoding), json_bool(cli->mesh),
           json_bool(cli->preview), pls->particles_per_cell, pls->reseed_every,
           json_bool(pls->radius_adjust), pls->seed);
 }

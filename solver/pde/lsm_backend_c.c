@@ -1,27 +1,47 @@
-/* The scalar C backend: the reference.  Fields live on the host; the cell
- * loops are in lsm_scheme.c and lsm_reinit.c (OpenMP over rows). */
+/* The C backend, the reference: fields on the host, the cell loops of lsm_scheme.c and
+ * lsm_reinit.c (OpenMP over rows), particles through lsm_particles.c. */
 #include <stdlib.h>
 #include <string.h>
 
 #include "solver/pde/lsm_backend.h"
 #include "solver/pde/lsm_reinit.h"
 
+typedef struct c_ctx {
+  char device[64]; /* "C (2 threads)" */
+} c_ctx;
+
 typedef struct c_state {
-  lsm_grid *phi, *phi_target;
-  lsm_stepper *stepper;
-  lsm_reinit *reinit; /* created on first use */
+  lsm_grid *field[LSM_FIELD_COUNT]; /* phi0 created by its first copy */
+  lsm_grid *phi_target;
+  lsm_particles *pls; /* the loaded particle set (pls_load) */
+  int radius_adjust;
   int threads;
 } c_state;
 
-static void c_destroy(void **state) {
-  if (!state || !*state) return;
-  c_state *s = *state;
-  lsm_grid_destroy(&s->phi);
+static lsm_status c_open(int device, int threads, void **ctx, lsm_err *err) {
+  (void)device;
+  c_ctx *c = calloc(1, sizeof *c);
+  if (!c) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the C backend");
+  snprintf(c->device, sizeof c->device, "C (%d thread%s)", threads, threads == 1 ? "" : "s");
+  *ctx = c;
+  return LSM_OK;
+}
+
+static void c_close(void *ctx) { free(ctx); }
+
+/* Nothing is built: build_seconds 0. */
+static int c_facts(const void *ctx, lsm_backend_fact *facts, int max) {
+  const c_ctx *c = ctx;
+  return lsm_backend_contract_facts(facts, max, c ? c->device : "C", 0.0);
+}
+
+static void c_destroy(void *state) {
+  c_state *s = state;
+  if (!s) return;
+  for (int f = 0; f < LSM_FIELD_COUNT; ++f) lsm_grid_destroy(&s->field[f]);
   lsm_grid_destroy(&s->phi_target);
-  lsm_stepper_destroy(&s->stepper);
-  lsm_reinit_destroy(&s->reinit);
+  lsm_pls_destroy(&s->pls);
   free(s);
-  *state = NULL;
 }
 
 static lsm_status c_create(void *ctx, const lsm_grid *phi_source, const lsm_grid *phi_target,
@@ -31,12 +51,13 @@ static lsm_status c_create(void *ctx, const lsm_grid *phi_source, const lsm_grid
   c_state *s = calloc(1, sizeof *s);
   if (!s) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the C backend state");
   s->threads = threads < 1 ? 1 : threads;
-  lsm_status st = lsm_grid_clone(phi_source, &s->phi, err);
+  const lsm_grid *g = phi_source;
+  lsm_status st = lsm_grid_clone(phi_source, &s->field[LSM_FIELD_PHI], err);
   if (st == LSM_OK) st = lsm_grid_clone(phi_target, &s->phi_target, err);
-  if (st == LSM_OK) st = lsm_stepper_create(phi_source, &s->stepper, err);
+  if (st == LSM_OK) st = lsm_grid_create(g->nx, g->ny, g->dx, g->dy, &s->field[LSM_FIELD_STAGE1], err);
+  if (st == LSM_OK) st = lsm_grid_create(g->nx, g->ny, g->dx, g->dy, &s->field[LSM_FIELD_STAGE2], err);
   if (st != LSM_OK) {
-    void *p = s;
-    c_destroy(&p);
+    c_destroy(s);
     return st;
   }
   lsm_grid_fill_ghosts(s->phi_target);
@@ -44,104 +65,119 @@ static lsm_status c_create(void *ctx, const lsm_grid *phi_source, const lsm_grid
   return LSM_OK;
 }
 
-static lsm_status c_cfl_dt(void *state, lsm_scheme scheme, double cfl, double *dt,
-                           lsm_err *err) {
+static lsm_status c_fill_ghosts(void *state, lsm_field f, lsm_err *err) {
   (void)err;
-  c_state *s = state;
-  lsm_cfl_dt(s->phi, s->phi_target, scheme, cfl, s->threads, dt);
+  lsm_grid_fill_ghosts(((c_state *)state)->field[f]);
   return LSM_OK;
 }
 
-static lsm_status c_step(void *state, lsm_scheme scheme, lsm_time time, float dt,
-                         const lsm_stage_hook *hook, lsm_err *err) {
-  (void)err;
+static lsm_status c_copy(void *state, lsm_field dst, lsm_field src, lsm_err *err) {
   c_state *s = state;
-  lsm_step_hooked(s->stepper, scheme, time, s->phi, s->phi_target, dt, s->threads, hook);
+  if (!s->field[dst]) return lsm_grid_clone(s->field[src], &s->field[dst], err);
+  lsm_grid_copy(s->field[dst], s->field[src]);
   return LSM_OK;
 }
 
-static lsm_status c_reinit(void *state, int iterations, lsm_err *err) {
+/* The buffers change places, the grids stay (a phi read through read_phi stays phi). */
+static void c_swap(void *state, lsm_field a, lsm_field b) {
   c_state *s = state;
-  if (!s->reinit) LSM_TRY(lsm_reinit_create(s->phi, &s->reinit, err));
-  lsm_reinit_run(s->reinit, s->phi, iterations, s->threads);
+  lsm_grid_swap(s->field[a], s->field[b]);
+}
+
+static lsm_status c_stage(void *state, lsm_scheme scheme, lsm_field out, lsm_field u0,
+                          lsm_field in, float c0, float c1, float dt, lsm_err *err) {
+  (void)err;
+  c_state *s = state;
+  lsm_scheme_stage(scheme, s->field[out], s->field[u0], s->field[in], s->phi_target, c0, c1, dt,
+                   s->threads);
+  return LSM_OK;
+}
+
+static lsm_status c_max_rate(void *state, lsm_scheme scheme, float *rate, lsm_err *err) {
+  (void)err;
+  c_state *s = state;
+  *rate = lsm_cfl_max_rate(s->field[LSM_FIELD_PHI], s->phi_target, scheme, s->threads);
   return LSM_OK;
 }
 
 static lsm_status c_residual(void *state, double *norm, lsm_err *err) {
   (void)err;
   c_state *s = state;
-  *norm = lsm_grid_diff_norm(s->phi, s->phi_target, s->threads);
+  *norm = lsm_grid_diff_norm(s->field[LSM_FIELD_PHI], s->phi_target, s->threads);
   return LSM_OK;
 }
 
-static lsm_status c_download(void *state, lsm_grid *phi, lsm_err *err) {
-  (void)err;
+static lsm_status c_reinit_sweep(void *state, lsm_field out, lsm_field in, lsm_err *err) {
   c_state *s = state;
-  if (phi != s->phi) lsm_grid_copy(phi, s->phi);
+  if (!s->field[LSM_FIELD_PHI0])
+    return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "reinitialisation: phi0 was not taken");
+  lsm_reinit_sweep(s->field[out], s->field[in], s->field[LSM_FIELD_PHI0], s->threads);
+  return LSM_OK;
+}
+
+static lsm_status c_read_phi(void *state, const lsm_grid **phi, lsm_err *err) {
+  (void)err;
+  *phi = ((c_state *)state)->field[LSM_FIELD_PHI];
   return LSM_OK;
 }
 
 static lsm_status c_upload(void *state, const lsm_grid *phi, lsm_err *err) {
-  (void)err;
   c_state *s = state;
-  if (phi != s->phi) lsm_grid_copy(s->phi, phi);
+  lsm_grid *now = s->field[LSM_FIELD_PHI];
+  if (phi->nx != now->nx || phi->ny != now->ny)
+    return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "C backend: host grid %dx%d differs from %dx%d",
+                    phi->nx, phi->ny, now->nx, now->ny);
+  lsm_grid_copy(now, phi);
   return LSM_OK;
 }
 
-static lsm_grid *c_host_phi(void *state) { return ((c_state *)state)->phi; }
+/* ---- particles: a copy of the driver's set, stepped by lsm_particles.c ---------------- */
 
-/* Particles run on the host phi through the stage hook (solver/pde/lsm_particles.c):
- * no particle ops. */
-static const lsm_backend_ops c_ops = {.name = "c",
-                                      .create = c_create,
-                                      .cfl_dt = c_cfl_dt,
-                                      .step = c_step,
-                                      .reinit = c_reinit,
-                                      .residual = c_residual,
-                                      .download = c_download,
-                                      .upload = c_upload,
-                                      .host_phi = c_host_phi,
-                                      .destroy = c_destroy,
-                                      .pls_load = NULL,
-                                      .pls_correct = NULL};
-
-const lsm_backend_ops *lsm_backend_c_ops(void) { return &c_ops; }
-
-/* ---- opening a backend ---------------------------------------------------------- */
-
-LSM_NAME_FUNCTIONS(lsm_backend_kind, LSM_BACKEND_LIST, lsm_backend_kind_name,
-                   lsm_backend_kind_from_name)
-
-lsm_status lsm_backend_open(lsm_backend_kind kind, int device, int threads, lsm_backend **out,
-                            lsm_err *err) {
-  *out = NULL;
-  lsm_backend *b = calloc(1, sizeof *b);
-  if (!b) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a backend");
-  if (kind == LSM_BACKEND_OPENCL || kind == LSM_BACKEND_AUTO) {
-    lsm_err cl_err;
-    lsm_err_clear(&cl_err);
-    lsm_status st = lsm_backend_cl_open(device, b, &cl_err);
-    if (st == LSM_OK) {
-      *out = b;
-      return LSM_OK;
-    }
-    if (kind == LSM_BACKEND_OPENCL) {
-      free(b);
-      return lsm_fail(err, st, NULL, "%s", cl_err.msg);
-    }
-    snprintf(b->fallback, sizeof b->fallback, "%s", cl_err.msg);
+static lsm_status c_pls_load(void *state, const lsm_pls_view *set, int radius_adjust,
+                             lsm_err *err) {
+  c_state *s = state;
+  if (s->pls && s->radius_adjust != radius_adjust) lsm_pls_destroy(&s->pls);
+  if (!s->pls) {
+    lsm_pls_opts o;
+    lsm_pls_opts_default(&o);
+    o.threads = s->threads;
+    o.radius_adjust = radius_adjust;
+    LSM_TRY(lsm_pls_create_empty(s->field[LSM_FIELD_PHI], &o, &s->pls, err));
+    s->radius_adjust = radius_adjust;
   }
-  b->ops = lsm_backend_c_ops();
-  snprintf(b->device, sizeof b->device, "C (%d thread%s)", threads, threads == 1 ? "" : "s");
-  *out = b;
-  return LSM_OK;
+  return lsm_pls_set(s->pls, set->n, set->x, set->y, set->sign, set->radius, err);
 }
 
-void lsm_backend_close(lsm_backend **backend) {
-  if (!backend || !*backend) return;
-  if ((*backend)->close_ctx) (*backend)->close_ctx(&(*backend)->ctx);
-  free(*backend);
-  *backend = NULL;
+static lsm_status c_pls_stage(void *state, lsm_field in, float c0, float c1, float dt,
+                              int stage, int stages, lsm_err *err) {
+  c_state *s = state;
+  if (stage == 0) lsm_pls_begin_step(s->pls, stages);
+  return lsm_pls_stage(s->pls, s->field[in], s->phi_target, c0, c1, dt, err);
 }
 
-lsm_status lsm_backend_list_devices(FILE *f, lsm_err *err) { return lsm_backend_cl_list(f, err); }
+static lsm_status c_pls_correct(void *state, lsm_pls_stats *stats, lsm_err *err) {
+  c_state *s = state;
+  return lsm_pls_correct_into(s->pls, s->field[LSM_FIELD_PHI], stats, err);
+}
+
+static const lsm_backend_ops c_ops = {
+    .facts = c_facts,
+    .close = c_close,
+    .create = c_create,
+    .destroy = c_destroy,
+    .fill_ghosts = c_fill_ghosts,
+    .copy = c_copy,
+    .swap = c_swap,
+    .stage = c_stage,
+    .max_rate = c_max_rate,
+    .residual = c_residual,
+    .reinit_sweep = c_reinit_sweep,
+    .read_phi = c_read_phi,
+    .upload = c_upload,
+    .pls_load = c_pls_load,
+    .pls_stage = c_pls_stage,
+    .pls_correct = c_pls_correct,
+};
+
+const lsm_backend_entry lsm_backend_c_entry = {
+    .host_threads = 1, .open = c_open, .list_devices = NULL, .ops = &c_ops};

@@ -1,13 +1,13 @@
-/* lsm_morph: the level-set metamorphosis of one slice pair (METHOD.md §2–3).
+/* lsm_morph: the level-set metamorphosis of one slice pair (solver/README.md §2, §4).
  *
- * A morph owns the working field phi (starting as phi_source), the target
- * phi_target, the integrator scratch and the reinitialisation scratch, and
- * advances
+ * A morph owns the pair's fields on a backend (lsm_fields: phi, starting as
+ * phi_source, the target phi_target and the scratch) and advances
  *     phi_t + (phi - phi_target) |grad phi| = 0
  * with a fixed step dt = cfl / max(|H1|/dx + |H2|/dy) computed once from
- * phi_source (METHOD.md §3.4); with reinitialisation the bound is taken again
- * after each one, and dt shrinks if it must.  The pair and stack drivers
- * decide when to stop and what to keep; the morph only steps.
+ * phi_source; with reinitialisation the bound is taken again after each one,
+ * and dt shrinks if it must.  With particles it seeds them on the host and
+ * has the backend step and correct them.  The pair and stack drivers decide
+ * when to stop and what to keep; the morph only steps.
  */
 #ifndef LSM_MORPH_H
 #define LSM_MORPH_H

@@ -59,8 +59,8 @@ static int pls_threads(const lsm_particles *p, size_t n) {
 
 /* ---- interpolation ---------------------------------------------------------------- */
 
-/* Forced inlining into the particle loops: about 20 % faster advection with
- * GCC 12 (the out-of-line versions were not inlined at -O3). */
+/* Forced inlining into the particle loops (GCC 12 left them out of line at
+ * -O3; validation/measurements/pde.md). */
 #if defined(__GNUC__)
 #define PCL_INLINE static inline __attribute__((always_inline))
 #else
@@ -328,24 +328,15 @@ static lsm_status seed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
 void lsm_pls_destroy(lsm_particles **pp) {
   if (!pp || !*pp) return;
   lsm_particles *p = *pp;
-  free(p->x);
-  free(p->y);
-  free(p->x0);
-  free(p->y0);
-  free(p->radius);
-  free(p->sign);
-  free(p->state);
-  free(p->plus);
-  free(p->minus);
-  free(p->velocity);
-  free(p->mark);
-  free(p->escaped);
+  void *owned[] = {p->x,     p->y,     p->x0,       p->y0,   p->radius,  p->sign,
+                   p->state, p->plus,  p->minus,    p->velocity, p->mark, p->escaped};
+  for (size_t k = 0; k < sizeof owned / sizeof *owned; ++k) free(owned[k]);
   free(p);
   *pp = NULL;
 }
 
-lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_particles **out,
-                          lsm_err *err) {
+lsm_status lsm_pls_create_empty(const lsm_grid *like, const lsm_pls_opts *o, lsm_particles **out,
+                                lsm_err *err) {
   *out = NULL;
   lsm_pls_opts opts;
   if (o)
@@ -359,13 +350,19 @@ lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_parti
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "reseeding interval %d must be >= 0",
                     opts.reseed_every);
   if (opts.threads < 1) opts.threads = 1;
+  size_t cells;
+  /* The particle loops index the node field (4 floats per node) and phi's
+   * rows with int offsets (32-bit index vectors in the vectorised loops). */
+  if (!lsm_size_mul((size_t)like->nx, (size_t)like->ny, &cells) || cells > (size_t)INT_MAX / 4 ||
+      (size_t)like->stride * (size_t)(like->ny + 1) > (size_t)INT_MAX)
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "particles: grid %dx%d is too large for the particle level set (at most 2^29 nodes)", like->nx, like->ny);
   lsm_particles *p = calloc(1, sizeof *p);
   if (!p) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a particle set");
   p->opts = opts;
-  p->nx = phi0->nx;
-  p->ny = phi0->ny;
-  p->dx = phi0->dx;
-  p->dy = phi0->dy;
+  p->nx = like->nx;
+  p->ny = like->ny;
+  p->dx = like->dx;
+  p->dy = like->dy;
   p->inv_dx = 1.0f / p->dx;
   p->inv_dy = 1.0f / p->dy;
   p->inv_2dx = 0.5f / p->dx;
@@ -376,29 +373,34 @@ lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_parti
   p->rmin = lsm_pcl_rmin(p->dx, p->dy);
   p->rmax = lsm_pcl_rmax(p->dx, p->dy);
   p->band = 3.0f * hmax;
-  size_t cells;
-  /* The particle loops index the node field (4 floats per node) and phi's
-   * rows with int offsets (32-bit index vectors in the vectorised loops). */
-  if (!lsm_size_mul((size_t)p->nx, (size_t)p->ny, &cells) || cells > (size_t)INT_MAX / 4 ||
-      (size_t)phi0->stride * (size_t)(phi0->ny + 1) > (size_t)INT_MAX) {
-    lsm_pls_destroy(&p);
-    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "particles: grid %dx%d is too large for the particle level set (at most 2^29 nodes)", phi0->nx, phi0->ny);
-  }
+  *out = p;
+  return LSM_OK;
+}
+
+lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_particles **out,
+                          lsm_err *err) {
+  LSM_TRY(lsm_pls_create_empty(phi0, o, out, err));
+  lsm_status st = seed(*out, phi0, err);
+  if (st != LSM_OK) lsm_pls_destroy(out);
+  return st;
+}
+
+/* The grid-sized scratch of stages and corrections, allocated on first use (a
+ * set that only seeds, as lsm_morph's, needs none). */
+static lsm_status scratch(lsm_particles *p, lsm_err *err) {
+  if (p->velocity) return LSM_OK;
+  const size_t cells = (size_t)p->nx * (size_t)p->ny; /* checked at creation */
   p->plus = lsm_alloc(cells, sizeof(float), err, "particle correction");
   p->minus = p->plus ? lsm_alloc(cells, sizeof(float), err, "particle correction") : NULL;
   p->mark = p->minus ? calloc(cells, 1) : NULL;
   p->velocity = p->mark ? lsm_alloc(cells, 3 * sizeof(float), err, "particle advection") : NULL;
-  if (!p->velocity) {
-    lsm_pls_destroy(&p);
-    return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot allocate correction scratch");
-  }
-  lsm_status st = seed(p, phi0, err);
-  if (st != LSM_OK) {
-    lsm_pls_destroy(&p);
-    return st;
-  }
-  *out = p;
-  return LSM_OK;
+  if (p->velocity) return LSM_OK;
+  free(p->plus);
+  free(p->minus);
+  free(p->mark);
+  p->plus = p->minus = NULL;
+  p->mark = NULL;
+  return lsm_fail(err, LSM_ERR_NOMEM, NULL, "particles: cannot allocate correction scratch");
 }
 
 void lsm_pls_begin_step(lsm_particles *p, int stages) {
@@ -411,11 +413,10 @@ void lsm_pls_begin_step(lsm_particles *p, int stages) {
  * compiler vectorises them (GCC function multi-versioning picks the AVX2 or
  * AVX-512 clone at load time, same arithmetic, no FMA contraction in C17).
  * The interpolations' loads stay scalar per lane, two neighbouring floats at
- * a time (load_pair): GCC's generic tuning emits no gather instructions, and
- * with them (-mtune=icelake-server) the bunny's pls run was 18 % slower on
- * this AMD EPYC.  F and the unit normal N at a particle come from the node
- * field v (three planes: F, gx, gy), bilinearly interpolated; the new
- * position is lsm_pcl_stage_coord, as on OpenCL. */
+ * a time (load_pair): gather instructions were slower.  F and the unit normal
+ * N at a particle come from the node field v (three planes: F, gx, gy),
+ * bilinearly interpolated; the new position is lsm_pcl_stage_coord, as on
+ * OpenCL. */
 PCL_INLINE float float_bits(uint32_t bits) {
   float f;
   memcpy(&f, &bits, sizeof f);
@@ -424,8 +425,7 @@ PCL_INLINE float float_bits(uint32_t bits) {
 
 /* The two floats at p and p + 1 in one 64-bit load: the vectorised loops load
  * each lane's neighbours element by element, and in pairs that is half the
- * loads (the bunny every 8th, pls, one thread: morph 0.335 -> 0.283 s with the
- * blocked detection below; same values). */
+ * loads. */
 PCL_INLINE void load_pair(const float *restrict p, float *first, float *second) {
   uint64_t bits;
   memcpy(&bits, p, sizeof bits);
@@ -506,11 +506,12 @@ static int advect(ptrdiff_t n, float *restrict px, float *restrict py, float *re
   return outside;
 }
 
-void lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_target, float c0,
-                   float c1, float dt) {
+lsm_status lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_target,
+                         float c0, float c1, float dt, lsm_err *err) {
   const ptrdiff_t n = (ptrdiff_t)p->n;
   const float hx = (float)(p->nx - 1), hy = (float)(p->ny - 1);
-  if (n == 0) return;
+  if (n == 0) return LSM_OK;
+  LSM_TRY(scratch(p, err));
   build_velocity(p, in, phi_target, (long)p->nx * p->ny < 65536L ? 1 : pls_threads(p, LSM_PLS_MIN_PARALLEL));
   const int nt = pls_threads(p, p->n);
   const int outside =
@@ -531,11 +532,7 @@ void lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_tar
       p->y[k] = lsm_pcl_clamp_coord(yn, hy);
     }
   }
-}
-
-void lsm_pls_stage_hook(void *ctx, const lsm_grid *in, const lsm_grid *phi_target, float c0,
-                        float c1, float dt) {
-  lsm_pls_stage((lsm_particles *)ctx, in, phi_target, c0, c1, dt);
+  return LSM_OK;
 }
 
 /* Escaped-particle detection (sign(phi(p)) != s_p and |phi(p)| > r_p),
@@ -586,12 +583,26 @@ static void detect(int n, const float *restrict px, const float *restrict py,
   *strays = stray;
 }
 
-lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
+void lsm_pls_count_correction(lsm_pls_stats *q, long long removed, long long strays,
+                              long long escaped, long long corrected) {
+  q->left_domain += removed;
+  q->stray += strays;
+  q->escaped_last = escaped;
+  q->corrected_last = corrected;
+  q->escaped_total += escaped;
+  q->corrected_total += corrected;
+  q->steps++;
+}
+
+lsm_status lsm_pls_correct_into(lsm_particles *p, lsm_grid *phi, lsm_pls_stats *stats,
+                                lsm_err *err) {
   if (phi->nx != p->nx || phi->ny != p->ny)
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "particles: grid %dx%d, particles seeded on %dx%d",
                     phi->nx, phi->ny, p->nx, p->ny);
+  LSM_TRY(scratch(p, err));
+  long long removed = 0;
   if (p->left_pending) {
-    p->stats.left_domain += (long long)compact(p, PCL_LEFT);
+    removed = (long long)compact(p, PCL_LEFT);
     p->left_pending = 0;
   }
   const ptrdiff_t n = (ptrdiff_t)p->n;
@@ -610,7 +621,6 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
     strays += s;
   }
   p->left_pending += (size_t)strays;
-  p->stats.stray += strays;
 
   /* The escaped particles, in particle order (few: a scan of the flags,
    * eight at a time where none of them is set). */
@@ -683,10 +693,6 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
         }
       }
   }
-  p->stats.escaped_last = (long long)escaped;
-  p->stats.corrected_last = corrected;
-  p->stats.escaped_total += (long long)escaped;
-  p->stats.corrected_total += corrected;
 
   /* 4. radius adjustment on the corrected phi (option) */
   if (p->opts.radius_adjust) {
@@ -699,13 +705,17 @@ lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
     }
   }
 
-  p->stats.steps++;
-  lsm_status st = LSM_OK;
+  lsm_pls_count_correction(stats, removed, strays, (long long)escaped, corrected);
+  lsm_grid_fill_ghosts(phi);
+  return LSM_OK;
+}
+
+lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err) {
+  LSM_TRY(lsm_pls_correct_into(p, phi, &p->stats, err));
   /* 5. reseeding (option) */
   if (p->opts.reseed_every > 0 && p->stats.steps % p->opts.reseed_every == 0)
-    st = lsm_pls_reseed(p, phi, err);
-  lsm_grid_fill_ghosts(phi);
-  return st;
+    return lsm_pls_reseed(p, phi, err);
+  return LSM_OK;
 }
 
 lsm_status lsm_pls_reseed(lsm_particles *p, const lsm_grid *phi, lsm_err *err) {
@@ -752,5 +762,6 @@ lsm_status lsm_pls_set(lsm_particles *p, size_t n, const float *x, const float *
     p->state[k] = 0;
   }
   p->n = n;
+  p->left_pending = 0;
   return LSM_OK;
 }

@@ -1,5 +1,5 @@
 /* lsm_particles: the particle level set (PLS) correction of the morph
- * (METHOD.md §4; design document §3.3.13, Algorithms 3.2 and 3.3,
+ * (solver/README.md §11; the design document's Algorithms 3.2 and 3.3,
  * Eq. 3.15–3.26; Enright, Fedkiw, Ferziger & Mitchell 2002).
  *
  * Marker particles are seeded in a band around the zero level of phi_0,
@@ -29,7 +29,7 @@
  *
  * Typical step (see lsm_pls_stage for Runge–Kutta):
  *     lsm_pls_begin_step(p, stages);
- *     lsm_pls_stage(p, phi_n, target, 0, 1, dt);     (same stages as the grid)
+ *     lsm_pls_stage(p, phi_n, target, 0, 1, dt, err); (same stages as the grid)
  *     ... grid step phi_n -> phi_{n+1} ...
  *     lsm_pls_correct(p, phi_{n+1}, err);
  */
@@ -105,6 +105,11 @@ typedef struct lsm_particles lsm_particles;
 lsm_status lsm_pls_create(const lsm_grid *phi0, const lsm_pls_opts *o, lsm_particles **out,
                           lsm_err *err);
 
+/* An empty set on a grid like `like` (the same checks as lsm_pls_create), to be
+ * filled by lsm_pls_set: a backend's copy of a seeded set. */
+lsm_status lsm_pls_create_empty(const lsm_grid *like, const lsm_pls_opts *o, lsm_particles **out,
+                                lsm_err *err);
+
 /* Frees the set and sets *p to NULL (NULL and *p == NULL are fine). */
 void lsm_pls_destroy(lsm_particles **p);
 
@@ -126,14 +131,10 @@ void lsm_pls_begin_step(lsm_particles *p, int stages);
  * A particle whose new position leaves the domain is clamped to it and marked;
  * lsm_pls_correct removes it (stats.left_domain).  Ghost cells are not read,
  * so this may run before or after the grid stage as long as 'in' still holds
- * the stage's input. */
-void lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_target, float c0,
-                   float c1, float dt);
-
-/* The same as lsm_pls_stage with the set passed as void * (ctx), for a
- * stage-hook callback of the stepper. */
-void lsm_pls_stage_hook(void *ctx, const lsm_grid *in, const lsm_grid *phi_target, float c0,
-                        float c1, float dt);
+ * the stage's input.  Errors: LSM_ERR_NOMEM (the grid-sized scratch, allocated
+ * on first use). */
+lsm_status lsm_pls_stage(lsm_particles *p, const lsm_grid *in, const lsm_grid *phi_target,
+                         float c0, float c1, float dt, lsm_err *err);
 
 /* After a level-set step: removes particles that left the domain, then the
  * correction of Algorithm 3.3 on phi in place (the document's smoothed
@@ -154,6 +155,19 @@ void lsm_pls_stage_hook(void *ctx, const lsm_grid *in, const lsm_grid *phi_targe
  * nothing is done), LSM_ERR_NOMEM / LSM_ERR_LIMIT when a reseeding cannot grow
  * the arrays (the set is then left empty, phi is corrected). */
 lsm_status lsm_pls_correct(lsm_particles *p, lsm_grid *phi, lsm_err *err);
+
+/* lsm_pls_correct without the reseeding, counted into *stats (the set's own
+ * counters are left as they are): a backend's correction of a set whose
+ * seeding its driver does. */
+lsm_status lsm_pls_correct_into(lsm_particles *p, lsm_grid *phi, lsm_pls_stats *stats,
+                                lsm_err *err);
+
+/* How a correction counts (every backend's): `removed` particles left the
+ * domain (in the step's stages, or strays flagged by the previous
+ * correction), `strays` flagged now, `escaped` escaped ones corrected
+ * `corrected` grid values; one step more. */
+void lsm_pls_count_correction(lsm_pls_stats *stats, long long removed, long long strays,
+                              long long escaped, long long corrected);
 
 /* Drops every particle and seeds the next generation on phi (the reseeding
  * lsm_pls_correct does every reseed_every steps; also for a set whose

@@ -1,29 +1,22 @@
 /* lsm_reinit: restore phi to a signed distance function without moving its zero
- * level (PDE reinitialisation with the Russo–Smereka subcell fix).
+ * level (PDE reinitialisation with the Russo–Smereka subcell fix,
+ * solver/README.md §10).
  *
  *   phi_tau + S(phi0) (|grad phi| - 1) = 0,   phi(tau = 0) = phi0.
  *
- * Why PDE reinitialisation rather than fast marching: it is a local stencil
- * iteration, so the same per-cell code (kernels/lsm_cell.h) runs on the C path
- * and in OpenCL; the Russo–Smereka fix keeps the interface cells anchored to
- * the subcell position of the zero level of phi0, so the front does not drift
- * (the plain scheme moves it by O(dx) per reinitialisation).  Each iteration
- * corrects a band about dtau = 0.5 min(dx, dy) wider, so `iterations` sets the
- * width of the band that becomes a distance function.
+ * A local stencil iteration, so the same per-cell code (kernels/lsm_cell.h)
+ * runs on the C path and in OpenCL; the subcell fix keeps the interface cells
+ * anchored to the zero level of phi0.  Each pseudo-time step (dtau = 0.5
+ * min(dx, dy)) corrects a band about dtau wider.  The loop over the steps is
+ * lsm_fields_reinit; this is the C reference's sweep.
  */
 #ifndef LSM_REINIT_H
 #define LSM_REINIT_H
 
 #include "solver/base/lsm_grid.h"
-#include "solver/base/lsm_status.h"
 
-typedef struct lsm_reinit lsm_reinit;
-
-lsm_status lsm_reinit_create(const lsm_grid *like, lsm_reinit **out, lsm_err *err);
-void lsm_reinit_destroy(lsm_reinit **reinit);
-
-/* Runs `iterations` pseudo-time steps (forward Euler, dtau = 0.5 min(dx,dy))
- * on phi in place. */
-void lsm_reinit_run(lsm_reinit *reinit, lsm_grid *phi, int iterations, int threads);
+/* One pseudo-time step out <- in, phi0 the field at the start (ghosts of in and
+ * phi0 filled); rows in parallel. */
+void lsm_reinit_sweep(lsm_grid *out, const lsm_grid *in, const lsm_grid *phi0, int threads);
 
 #endif

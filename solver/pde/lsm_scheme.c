@@ -2,7 +2,6 @@
 
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "kernels/lsm_stencil.h"
 
@@ -15,9 +14,8 @@ int lsm_time_stages(lsm_time time) {
 
 /* ---- CFL ------------------------------------------------------------------------ */
 
-void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
-                int threads, double *dt) {
-  lsm_grid_fill_ghosts(phi);
+float lsm_cfl_max_rate(const lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme,
+                       int threads) {
   const int roefix = scheme == LSM_SCHEME_ROEFIX;
   const float inv_dx = 1.0f / phi->dx, inv_dy = 1.0f / phi->dy;
   const ptrdiff_t s = phi->stride;
@@ -31,7 +29,15 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, do
       row_rate = lsm_maxf(row_rate, lsm_cfl_rate_at(p, t, row + i, s, inv_dx, inv_dy, roefix));
     rate = lsm_maxf(rate, row_rate);
   }
-  *dt = rate > 0.0f ? cfl / (double)rate : INFINITY;
+  return rate;
+}
+
+double lsm_cfl_step(double cfl, float rate) { return rate > 0.0f ? cfl / (double)rate : INFINITY; }
+
+void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
+                int threads, double *dt) {
+  lsm_grid_fill_ghosts(phi);
+  *dt = lsm_cfl_step(cfl, lsm_cfl_max_rate(phi, phi_target, scheme, threads));
 }
 
 /* ---- one stage -------------------------------------------------------------------- */
@@ -84,84 +90,12 @@ void lsm_scheme_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_
   }
 }
 
-/* ---- integrators ---------------------------------------------------------------------- */
-
-struct lsm_stepper {
-  lsm_grid *stage1, *stage2;
-};
-
-lsm_status lsm_stepper_create(const lsm_grid *like, lsm_stepper **out, lsm_err *err) {
-  *out = NULL;
-  lsm_stepper *st = calloc(1, sizeof *st);
-  if (!st) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the integrator");
-  lsm_status status = lsm_grid_create(like->nx, like->ny, like->dx, like->dy, &st->stage1, err);
-  if (status == LSM_OK)
-    status = lsm_grid_create(like->nx, like->ny, like->dx, like->dy, &st->stage2, err);
-  if (status != LSM_OK) {
-    lsm_stepper_destroy(&st);
-    return status;
-  }
-  *out = st;
-  return LSM_OK;
-}
-
-void lsm_stepper_destroy(lsm_stepper **stepper) {
-  if (!stepper || !*stepper) return;
-  lsm_grid_destroy(&(*stepper)->stage1);
-  lsm_grid_destroy(&(*stepper)->stage2);
-  free(*stepper);
-  *stepper = NULL;
-}
-
-/* One stage, after telling the hook. */
-static void hooked_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
-                         const lsm_grid *phi_target, float c0, float c1, float dt, int threads,
-                         const lsm_stage_hook *hook) {
-  if (hook && hook->stage) {
-    lsm_grid_fill_ghosts(in);
-    hook->stage(hook->ctx, in, phi_target, c0, c1, dt);
-  }
-  lsm_scheme_stage(scheme, out, u0, in, phi_target, c0, c1, dt, threads);
-}
-
-void lsm_step_hooked(lsm_stepper *st, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
-                     const lsm_grid *phi_target, float dt, int threads,
-                     const lsm_stage_hook *hook) {
-  switch (time) {
-  case LSM_TIME_RK2:
-    /* phi1 = phi - dt L(phi);  phi = 1/2 phi + 1/2 (phi1 - dt L(phi1)) */
-    hooked_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads, hook);
-    hooked_stage(scheme, phi, phi, st->stage1, phi_target, 0.5f, 0.5f, dt, threads, hook);
-    break;
-  case LSM_TIME_RK3:
-    /* phi1 = phi - dt L(phi)
-     * phi2 = 3/4 phi + 1/4 (phi1 - dt L(phi1))
-     * phi  = 1/3 phi + 2/3 (phi2 - dt L(phi2)) */
-    hooked_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads, hook);
-    hooked_stage(scheme, st->stage2, phi, st->stage1, phi_target, 0.75f, 0.25f, dt, threads, hook);
-    hooked_stage(scheme, phi, phi, st->stage2, phi_target, 1.0f / 3.0f, 2.0f / 3.0f, dt, threads,
-                 hook);
-    break;
-  default:
-    /* phi = phi - dt L(phi): computed into stage1 (in and out must differ),
-     * whose buffer then becomes phi's (no copy). */
-    hooked_stage(scheme, st->stage1, phi, phi, phi_target, 0.0f, 1.0f, dt, threads, hook);
-    lsm_grid_swap(phi, st->stage1);
-    break;
-  }
-}
-
-void lsm_step(lsm_stepper *st, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
-              const lsm_grid *phi_target, float dt, int threads) {
-  lsm_step_hooked(st, scheme, time, phi, phi_target, dt, threads, NULL);
-}
-
 /* ---- norms -------------------------------------------------------------------------- */
 
 /* Sum of squared differences of one row, in double, with 8 running partial
  * sums (lane l takes elements l, l+8, ...) combined in a fixed order: the
  * same result whatever the vector width the compiler picks (no reassociation
- * is needed to vectorise it), about 8x faster than one serial sum. */
+ * is needed to vectorise it), and vectorised, unlike one serial sum. */
 static double row_sq_diff(const float *restrict pa, const float *restrict pb, int n) {
   double acc[8] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   int i = 0;

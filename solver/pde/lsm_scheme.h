@@ -1,11 +1,12 @@
-/* lsm_scheme: one explicit step of the morph equation on a grid.
+/* lsm_scheme: the schemes and integrators by name, and the C reference's sweeps over host
+ * grids for the morph equation
  *
- *   phi_t + F |grad phi| = 0,   F = phi - phi_target         (METHOD.md §2)
+ *   phi_t + F |grad phi| = 0,   F = phi - phi_target         (solver/README.md §2, §4)
  *
- * Spatial schemes (numerical Hamiltonians, per cell in kernels/lsm_cell.h) and
- * TVD Runge–Kutta integrators (Shu & Osher 1988) are chosen by enums; the
- * dispatch happens once per sweep, outside the cell loops.  Grids carry a
- * ghost layer that these functions fill (zero-gradient boundary).
+ * Spatial schemes (numerical Hamiltonians, per cell in kernels/lsm_cell.h) and TVD
+ * Runge–Kutta integrators (Shu & Osher 1988; their tableaux in lsm_fields.c) are chosen by
+ * enums; a sweep dispatches once, outside its cell loop.  These sweeps are the C backend's
+ * cell ops (lsm_backend_c.c).
  */
 #ifndef LSM_SCHEME_H
 #define LSM_SCHEME_H
@@ -32,42 +33,22 @@ LSM_ENUM(lsm_time, LSM_TIME, LSM_TIME_LIST, lsm_time_name,
 /* Number of Hamiltonian evaluations per cell and step (1, 2, 3). */
 int lsm_time_stages(lsm_time time);
 
-/* The CFL step dt = cfl / max over cells of the scheme's rate (METHOD.md §3.4;
- * kernels/lsm_cell.h, lsm_cfl_rate_of): upwind, |H1|/dx + |H2|/dy on the four
+/* The CFL step (solver/README.md §4; kernels/lsm_cell.h, lsm_cfl_rate_of): the largest rate
+ * of the scheme over the cells of phi (ghosts filled): upwind, |H1|/dx + |H2|/dy on the four
  * one-sided gradient combinations; Roe-Fix, |F| (1/dx + 1/dy), which bounds its
- * Lax–Friedrichs dissipation; WENO5, upwind's.  Monotone for cfl <= 1 (upwind,
- * Roe-Fix; WENO5 is not monotone).  Fills phi's ghosts.
- * When the rate is 0 everywhere (phi == phi_target) *dt = +INFINITY. */
+ * Lax–Friedrichs dissipation; WENO5, upwind's.  dt = cfl / rate, monotone for cfl <= 1
+ * (upwind, Roe-Fix; WENO5 is not monotone); +INFINITY for a rate of 0 (phi == phi_target). */
+float lsm_cfl_max_rate(const lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme,
+                       int threads);
+double lsm_cfl_step(double cfl, float rate);
+/* Both on phi after filling its ghosts. */
 void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
                 int threads, double *dt);
 
-/* One Shu–Osher stage:  out = c0 * u0 + c1 * (in - dt * Hhat(in)).
+/* One Shu–Osher stage:  out = c0 * u0 + c1 * (in - dt * Hhat(in)), rows in parallel.
  * out may alias u0 (cell-wise), never in.  Fills in's ghosts. */
 void lsm_scheme_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
                       const lsm_grid *phi_target, float c0, float c1, float dt, int threads);
-
-/* Working storage for the integrators (two scratch grids). */
-typedef struct lsm_stepper lsm_stepper;
-lsm_status lsm_stepper_create(const lsm_grid *like, lsm_stepper **out, lsm_err *err);
-void lsm_stepper_destroy(lsm_stepper **stepper);
-
-/* Advances phi by one step of size dt with the given scheme and integrator. */
-void lsm_step(lsm_stepper *stepper, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
-              const lsm_grid *phi_target, float dt, int threads);
-
-/* Called before each Runge–Kutta stage out = c0 u0 + c1 (in - dt Hhat(in))
- * with that stage's input field, so Lagrangian particles can take the same
- * stage (lsm_pls_stage). */
-typedef struct lsm_stage_hook {
-  void *ctx;
-  void (*stage)(void *ctx, const lsm_grid *in, const lsm_grid *phi_target, float c0, float c1,
-                float dt);
-} lsm_stage_hook;
-
-/* lsm_step with a stage hook (may be NULL). */
-void lsm_step_hooked(lsm_stepper *stepper, lsm_scheme scheme, lsm_time time, lsm_grid *phi,
-                     const lsm_grid *phi_target, float dt, int threads,
-                     const lsm_stage_hook *hook);
 
 /* ||a - b||_2 over the interior (Frobenius norm, physical units), summed in
  * double row by row and then in row order, so the value does not depend on

@@ -151,7 +151,7 @@ static lsm_status gap_task(lsm_run *r, size_t i, const gap_plan *plan, const lsm
 static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps,
                        size_t most_slices) {
   const int threads = o->morph.threads < 1 ? 1 : o->morph.threads;
-  const int device = o->morph.backend && o->morph.backend->ops != lsm_backend_c_ops();
+  const int device = o->morph.backend && !lsm_backend_host_threads(o->morph.backend);
   if (threads == 1 || gaps < 2) return 1;
   const long long pixels = (long long)width * height;
   if (!device && pixels > 1024LL * 1024LL) return 1;

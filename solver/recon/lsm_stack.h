@@ -64,11 +64,12 @@ static inline int lsm_output_step_resolved(double step, double z_mag) {
   return step >= 8.0 * DBL_EPSILON * z_mag;
 }
 
-/* Add new items at the end of each list (lsm_names.h). */
+/* Each list's order is the order the help, the command line's messages and the
+ * README show; add new items at the end (lsm_names.h). */
 #define LSM_METHOD_LIST(X)                                                      \
   X(LSM_METHOD_LS, "ls")       /* level-set morph */                            \
-  X(LSM_METHOD_BLEND, "blend") /* linear interpolation of the two signed distances */ \
-  X(LSM_METHOD_PLS, "pls")     /* level-set morph with the particle level set correction */
+  X(LSM_METHOD_PLS, "pls")     /* level-set morph with the particle level set correction */ \
+  X(LSM_METHOD_BLEND, "blend") /* linear interpolation of the two signed distances */
 LSM_ENUM(lsm_method, LSM_METHOD, LSM_METHOD_LIST, lsm_method_name,
          lsm_method_from_name);
 
@@ -79,9 +80,9 @@ LSM_ENUM(lsm_input_kind, LSM_INPUT, LSM_INPUT_LIST, lsm_input_name,
          lsm_input_from_name);
 
 #define LSM_ALIGN_LIST(X)                                                       \
+  X(LSM_ALIGN_AUTO, "auto") /* hull for a pair only when its shape moved (see above) */ \
   X(LSM_ALIGN_HULL, "hull") /* convex-hull centroid to the image centre */      \
-  X(LSM_ALIGN_NONE, "none")                                                     \
-  X(LSM_ALIGN_AUTO, "auto") /* hull for a pair only when its shape moved (see above) */
+  X(LSM_ALIGN_NONE, "none")
 LSM_ENUM(lsm_align, LSM_ALIGN, LSM_ALIGN_LIST, lsm_align_name,
          lsm_align_from_name);
 
@@ -99,9 +100,9 @@ LSM_ENUM(lsm_interp, LSM_INTERP, LSM_INTERP_LIST, lsm_interp_name,
  * beyond the object), halfway where more slices lie beyond it (a scan that
  * covers more than the object). */
 #define LSM_ENDS_LIST(X)                                                        \
+  X(LSM_ENDS_AUTO, "auto")                                                      \
   X(LSM_ENDS_TIP, "tip")                                                        \
-  X(LSM_ENDS_HALFWAY, "halfway")                                                \
-  X(LSM_ENDS_AUTO, "auto")
+  X(LSM_ENDS_HALFWAY, "halfway")
 LSM_ENUM(lsm_end_rule, LSM_ENDS, LSM_ENDS_LIST, lsm_end_rule_name,
          lsm_end_rule_from_name);
 
