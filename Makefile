@@ -48,8 +48,9 @@ CFLAGS  ?=
 CFLAGS  += -std=c17 $(WARN) $(OPT) -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP
 # nifticlib's headers include each other by bare name from /usr/include/nifti
 CFLAGS  += -I/usr/include/nifti
-# every object also goes into liblsmorph.so, which exports lsmorph.h's functions only
-CFLAGS  += -fPIC -fvisibility=hidden
+# every library object also goes into liblsmorph.so, which exports lsmorph.h's
+# functions only; not for tests (test_tiff_changing interposes libc's read())
+OBJ_CFLAGS := -fPIC -fvisibility=hidden
 ifeq ($(MPI),1)
 CFLAGS  += -DLSM_WITH_MPI
 endif
@@ -96,11 +97,11 @@ $(DEPS_STAMP):
 # Objects are rebuilt when the compiler or its flags change (-fPIC came in with
 # liblsmorph.so): a stamp holds them and is rewritten only when they differ.
 FLAGS_STAMP := $(BUILD)/.cflags
-$(shell mkdir -p $(BUILD) && echo '$(CC) $(CFLAGS)' | cmp -s - $(FLAGS_STAMP) || \
-  echo '$(CC) $(CFLAGS)' > $(FLAGS_STAMP))
+$(shell mkdir -p $(BUILD) && echo '$(CC) $(CFLAGS) $(OBJ_CFLAGS)' | cmp -s - $(FLAGS_STAMP) || \
+  echo '$(CC) $(CFLAGS) $(OBJ_CFLAGS)' > $(FLAGS_STAMP))
 $(BUILD)/obj/%.o: %.c $(FLAGS_STAMP) | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) -c $< -o $@
+	$(CC) $(CFLAGS) $(OBJ_CFLAGS) -c $< -o $@
 
 # OpenCL kernels embedded in the binary: kernels/morph.cl with kernels/lsm_cell.h,
 # kernels/lsm_stencil.h and kernels/lsm_particle_cell.h spliced in at its #includes
