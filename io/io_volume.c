@@ -178,7 +178,7 @@ static size_t stream_header(const vol_stream *s, const lsm_volume_info *info, ch
 
 #define HEADER_CAP 2048
 /* zlib level of volume.nii.gz and of a gzip volume.nrrd: 1, as nibabel
- * writes; see README (speed and size) */
+ * writes; see validation/README.md (output sizes and times) */
 #define GZIP_LEVEL 1
 
 static lsm_status stream_open(lsm_volume_writer *w, unsigned format, lsm_err *err) {

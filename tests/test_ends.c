@@ -3,6 +3,7 @@
  * result is its count of cells with phi <= 0. */
 #include "tests/lsm_test_mask.h"
 
+#include "solver/base/lsm_flood.h"
 #include "solver/recon/lsm_ends.h"
 #include "solver/sdf/lsm_sdf.h"
 
@@ -431,7 +432,7 @@ static void test_label_components(void **state) {
   size_t tail = 0;
   for (int32_t k = 0; k < 32; ++k)
     if (label[k] >= 0) queue[tail++] = k;
-  lsm_grid_spread_labels(NULL, 0.0f, 8, 4, label, queue, tail);
+  assert_int_equal(lsm_flood(label, 8, 4, 8, -1, queue, tail), 32);
   assert_int_equal(label[3 * 8 + 1], 2); /* next to (0, 3) */
   assert_int_equal(label[0 * 8 + 7], 1); /* next to (7, 1) */
   assert_int_equal(label[0 * 8 + 3], 0); /* next to (2, 1) */
@@ -439,9 +440,31 @@ static void test_label_components(void **state) {
   lsm_grid_destroy(&phi);
 }
 
+/* lsm_flood's two connectivities on a 5 x 5 image whose walls (-2) run
+ * along the anti-diagonal: 4-neighbour steps stay on their side of it, 8-
+ * neighbour steps cross it diagonally; components count likewise. */
+static void test_flood_connectivity(void **state) {
+  (void)state;
+  int32_t label[25], queue[25];
+  for (int conn = 4; conn <= 8; conn += 4) {
+    for (int k = 0; k < 25; ++k) label[k] = (k % 5) + (k / 5) == 4 ? -2 : -1;
+    label[0] = 7;
+    queue[0] = 0;
+    const size_t reached = lsm_flood(label, 5, 5, conn, -1, queue, 1);
+    assert_int_equal(reached, conn == 4 ? 10 : 20); /* the upper-left triangle, or every open cell */
+    assert_int_equal(label[24], conn == 4 ? -1 : 7);
+    assert_int_equal(label[4], -2);
+    for (int k = 0; k < 25; ++k) label[k] = (k % 5) + (k / 5) == 4 ? -2 : -1;
+    assert_int_equal(lsm_flood_components(label, 5, 5, conn, -1, 3, queue), conn == 4 ? 2 : 1);
+    assert_int_equal(label[0], 3);
+    assert_int_equal(label[24], conn == 4 ? 4 : 3);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_label_components),
+      cmocka_unit_test(test_flood_connectivity),
       cmocka_unit_test(test_depth),
       cmocka_unit_test(test_linear_profiles),
       cmocka_unit_test(test_flat_end),

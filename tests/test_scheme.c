@@ -3,7 +3,7 @@
  * circle morph against its analytic solution (with a convergence check),
  * reinitialisation, and the fraction -> time map.
  *
- * Reference facts (METHOD.md §2–3):
+ * Reference facts (solver/README.md, sections 2 and 4):
  *   phi_t + F |grad phi| = 0,  F = phi - phi_target.
  *   For concentric circles phi_0 = |x| - r1, phi_T = |x| - r2, F = r2 - r1 is
  *   constant in space, phi stays a signed distance function, and the front is
@@ -297,7 +297,7 @@ static void test_cfl(void **state) {
 /* ------------------------------------------------------------------------ */
 /* Roe-Fix                                                                   */
 
-/* Algorithm 3.1 (METHOD.md §3 step 5) written out directly, in double.
+/* Algorithm 3.1 (Roe-Fix: solver/README.md, section 4) written out directly, in double.
  * Returns Hhat; *branch gets the LSM_ROEFIX_* code. */
 static void signs_h1(double F, const double *P, int np, const double *Q, int nq, int *pos,
                      int *neg, double *mx) {

@@ -246,6 +246,150 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
 static int has_distances(const lsm_slice_score *s) {
   return s->comparable && (s->area_result || s->area_truth);
 }
+
+/* A result of another stride or stack would be scored against the wrong
+ * slices: its slice count must be the one the kept slices first .. last give,
+ * and with --stride run.json's input count (inputs, 0: none) theirs. */
+static lsm_status check_result_count(const lsm_cli *cli, size_t n_truth, size_t first,
+                                     size_t last, size_t n_kept, size_t inputs,
+                                     const char *from, lsm_err *err) {
+  char dir[4200], **result = NULL;
+  size_t m = 0;
+  snprintf(dir, sizeof dir, "%s/slices", cli->result_dir);
+  struct stat info;
+  if (stat(dir, &info) != 0 && errno == ENOENT && stat(cli->result_dir, &info) == 0)
+    return lsm_fail(err, LSM_ERR_INPUT, dir,
+                    "no such folder: score reads the result's slices (a reconstruct run with "
+                    "--no-slices has none)");
+  LSM_TRY(lsm_dir_list_slices(dir, &result, &m, NULL, err));
+  lsm_path_list_free(result, m);
+  if (m != last - first + 1 && cli->stride)
+    return lsm_fail(err, LSM_ERR_INPUT, dir,
+                    "%zu slices, but slices %zu, %zu, %zu, ... of the %zu truth slices, "
+                    "reconstructed with --spacing %d and the default --dz, give %zu",
+                    m, first + 1, first + 1 + (size_t)cli->stride,
+                    first + 1 + 2 * (size_t)cli->stride, n_truth, cli->stride, last - first + 1);
+  if (m != last - first + 1)
+    return lsm_fail(err, LSM_ERR_INPUT, dir,
+                    "%zu slices, but its inputs (run.json) are truth slices %zu to %zu, one "
+                    "output step (--dz) apart: %zu",
+                    m, first + 1, last + 1, last - first + 1);
+  if (inputs && inputs != n_kept)
+    return lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
+                    "was made from %zu slices (run.json), but --stride %d%s keeps %zu of the %zu "
+                    "truth slices",
+                    inputs, cli->stride, from, n_kept, n_truth);
+  return LSM_OK;
+}
+
+/* An input slice comes back exactly: otherwise the result was not made from
+ * these slices of this truth.  path: the result's slice; truth: its truth
+ * slice; first: the first input's truth slice (0-based). */
+static lsm_status check_input_back(const lsm_cli *cli, const char *path, const char *truth,
+                                   const lsm_mask *a, const lsm_mask *b, size_t first,
+                                   lsm_err *err) {
+  if (memcmp(a->pixels, b->pixels, (size_t)a->width * (size_t)a->height) == 0) return LSM_OK;
+  if (cli->stride)
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "differs from the truth slice %s, which --stride %d makes an input: was "
+                    "the result made from slices %zu, %zu, %zu, ... of %s?",
+                    truth, cli->stride, first + 1, first + 1 + (size_t)cli->stride,
+                    first + 1 + 2 * (size_t)cli->stride, cli->truth_dir);
+  return lsm_fail(err, LSM_ERR_INPUT, path,
+                  "differs from the truth slice %s, which run.json's input heights make "
+                  "an input, the first input taken as truth slice %zu (--first N if it "
+                  "is slice N): was the result made from slices of %s?",
+                  truth, first + 1, cli->truth_dir);
+}
+
+/* The held-out slices' scores, summed as they come. */
+typedef struct score_sums {
+  double dice, hd95, msd, vol_r, vol_t, inter;
+  size_t count, incomparable, measured;
+  double *pool; /* every boundary distance, for the pooled HD95 */
+  size_t pool_n, pool_cap;
+  lsm_slice_score *per; /* --per-slice: each slice's scores, and its truth slice */
+  size_t *per_at;
+} score_sums;
+
+static void add_score(score_sums *t, const lsm_slice_score *s, size_t truth_slice) {
+  if (t->per) {
+    t->per[t->count] = *s;
+    t->per_at[t->count] = truth_slice;
+  }
+  t->dice += s->dice;
+  t->vol_r += (double)s->area_result;
+  t->vol_t += (double)s->area_truth;
+  t->inter += s->dice * (double)(s->area_result + s->area_truth) / 2.0;
+  t->incomparable += !s->comparable;
+  if (has_distances(s)) {
+    t->hd95 += s->hd95;
+    t->msd += s->mean_surface;
+    t->measured++;
+  }
+  t->count++;
+}
+
+/* Notes on the truth slices outside the inputs first .. last, which are not scored. */
+static void note_unscored(size_t n_truth, size_t first, size_t last) {
+  if (first == 1)
+    fprintf(stderr, "lsmorph: note: truth slice 1 lies before the first kept slice (2) and is "
+                    "not scored\n");
+  else if (first > 1)
+    fprintf(stderr,
+            "lsmorph: note: truth slices 1 to %zu lie before the first kept slice (%zu) and are "
+            "not scored\n",
+            first, first + 1);
+  if (last + 2 == n_truth)
+    fprintf(stderr,
+            "lsmorph: note: truth slice %zu lies past the last kept slice (%zu) and is not "
+            "scored (nothing is extrapolated past it)\n",
+            n_truth, last + 1);
+  else if (last + 2 < n_truth)
+    fprintf(stderr,
+            "lsmorph: note: truth slices %zu to %zu lie past the last kept slice (%zu) and are "
+            "not scored (nothing is extrapolated past it)\n",
+            last + 2, n_truth, last + 1);
+}
+
+/* The scores as one JSON object on stdout; undefined ones (no held-out slice,
+ * no boundary on both sides, an empty truth) are null, as in run.json. */
+static void print_scores(const score_sums *t, double pooled, char **truth, const size_t *kept,
+                         size_t n_kept) {
+  printf("{\"held_out\": %zu, \"dice_volume\": ", t->count);
+  lsm_json_number(stdout, t->vol_r + t->vol_t > 0 ? 2.0 * t->inter / (t->vol_r + t->vol_t) : 1.0);
+  printf(", \"dice\": ");
+  lsm_json_number(stdout, t->count ? t->dice / (double)t->count : NAN);
+  printf(", \"hd95\": ");
+  lsm_json_number(stdout, t->measured ? t->hd95 / (double)t->measured : NAN);
+  printf(", \"hd95_pooled\": ");
+  lsm_json_number(stdout, pooled);
+  printf(", \"mean_surface\": ");
+  lsm_json_number(stdout, t->measured ? t->msd / (double)t->measured : NAN);
+  printf(", \"volume_error\": ");
+  lsm_json_number(stdout, t->vol_t > 0 ? (t->vol_r - t->vol_t) / t->vol_t : NAN);
+  printf(", \"one_sided_empty\": %zu", t->incomparable);
+  if (t->per) {
+    printf(", \"slices\": [");
+    for (size_t i = 0, below = 0; i < t->count; ++i) {
+      const lsm_slice_score *p = &t->per[i];
+      const size_t at = t->per_at[i];
+      while (below + 1 < n_kept && kept[below + 1] < at) ++below;
+      printf("%s{\"truth\": %zu, \"file\": ", i ? ", " : "", at + 1);
+      lsm_json_string(stdout, lsm_base_name(truth[at]));
+      printf(", \"between\": [%zu, %zu], \"dice\": ", kept[below] + 1, kept[below + 1] + 1);
+      lsm_json_number(stdout, p->dice);
+      printf(", \"hd95\": ");
+      lsm_json_number(stdout, has_distances(p) ? p->hd95 : NAN);
+      printf(", \"mean_surface\": ");
+      lsm_json_number(stdout, has_distances(p) ? p->mean_surface : NAN);
+      printf(", \"area_result\": %zu, \"area_truth\": %zu}", p->area_result, p->area_truth);
+    }
+    printf("]");
+  }
+  printf("}\n");
+}
+
 lsm_status lsm_score(const lsm_cli *cli, lsm_err *err) {
   char **truth = NULL;
   size_t n = 0, *kept = NULL, n_kept = 0;
@@ -255,17 +399,13 @@ lsm_status lsm_score(const lsm_cli *cli, lsm_err *err) {
   double row_step = 1.0; /* pixel height / width: distances are in pixel widths */
   lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, &row_step, err);
   lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
-  double dice = 0, hd95 = 0, msd = 0, vol_r = 0, vol_t = 0, inter = 0;
-  size_t count = 0, incomparable = 0, measured = 0, pool_n = 0, pool_cap = 0;
-  double *pool = NULL;
+  score_sums sums;
+  memset(&sums, 0, sizeof sums);
   const size_t first = n_kept ? kept[0] : 0, last = n_kept ? kept[n_kept - 1] : 0;
-  /* --per-slice: each held-out slice's scores, and its truth slice */
-  lsm_slice_score *per = NULL;
-  size_t *per_at = NULL;
   if (st == LSM_OK && cli->per_slice) {
-    per = lsm_alloc(last - first + 1, sizeof *per, err, "per-slice scores");
-    per_at = lsm_alloc(last - first + 1, sizeof *per_at, err, "per-slice scores");
-    if (!per || !per_at) st = err ? err->status : LSM_ERR_NOMEM;
+    sums.per = lsm_alloc(last - first + 1, sizeof *sums.per, err, "per-slice scores");
+    sums.per_at = lsm_alloc(last - first + 1, sizeof *sums.per_at, err, "per-slice scores");
+    if (!sums.per || !sums.per_at) st = err ? err->status : LSM_ERR_NOMEM;
   }
   /* truth stored as 0/1 labels is read as such (the result slices are
    * 0/255), decided as reconstruct decided it: over the kept slices alone
@@ -277,36 +417,7 @@ lsm_status lsm_score(const lsm_cli *cli, lsm_err *err) {
     st = lsm_pick_foreground(kept_paths, n_kept, &ro_truth, 1, cli->truth_dir, err);
   }
   free(kept_paths);
-  if (st == LSM_OK) {
-    /* a result of another stride or stack would be scored against the wrong
-     * slices: its slice count must be the one the kept slices give */
-    char dir[4200], **result = NULL;
-    size_t m = 0;
-    snprintf(dir, sizeof dir, "%s/slices", cli->result_dir);
-    struct stat info;
-    if (stat(dir, &info) != 0 && errno == ENOENT && stat(cli->result_dir, &info) == 0)
-      st = lsm_fail(err, LSM_ERR_INPUT, dir,
-                    "no such folder: score reads the result's slices (a reconstruct run with "
-                    "--no-slices has none)");
-    if (st == LSM_OK) st = lsm_dir_list_slices(dir, &result, &m, NULL, err);
-    lsm_path_list_free(result, m);
-    if (st == LSM_OK && m != last - first + 1 && cli->stride)
-      st = lsm_fail(err, LSM_ERR_INPUT, dir,
-                    "%zu slices, but slices %zu, %zu, %zu, ... of the %zu truth slices, "
-                    "reconstructed with --spacing %d and the default --dz, give %zu",
-                    m, first + 1, first + 1 + (size_t)cli->stride,
-                    first + 1 + 2 * (size_t)cli->stride, n, cli->stride, last - first + 1);
-    else if (st == LSM_OK && m != last - first + 1)
-      st = lsm_fail(err, LSM_ERR_INPUT, dir,
-                    "%zu slices, but its inputs (run.json) are truth slices %zu to %zu, one "
-                    "output step (--dz) apart: %zu",
-                    m, first + 1, last + 1, last - first + 1);
-    if (st == LSM_OK && inputs && inputs != n_kept)
-      st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
-                    "was made from %zu slices (run.json), but --stride %d%s keeps %zu of the %zu "
-                    "truth slices",
-                    inputs, cli->stride, from, n_kept, n);
-  }
+  if (st == LSM_OK) st = check_result_count(cli, n, first, last, n_kept, inputs, from, err);
   for (size_t k = first, next = 0; st == LSM_OK && k <= last; ++k) {
     char path[4200];
     snprintf(path, sizeof path, "%s/slices/%05zu.png", cli->result_dir, k - first + 1);
@@ -316,108 +427,27 @@ lsm_status lsm_score(const lsm_cli *cli, lsm_err *err) {
     if (st == LSM_OK && (a.width != b.width || a.height != b.height))
       st = lsm_fail(err, LSM_ERR_INPUT, path, "slice is %dx%d but the truth slice %s is %dx%d",
                     a.width, a.height, truth[k], b.width, b.height);
-    if (next < n_kept && kept[next] == k) {
-      /* an input slice comes back exactly: otherwise the result was not made
-       * from these slices of this truth */
+    if (next < n_kept && kept[next] == k) { /* an input slice */
       ++next;
-      if (st == LSM_OK && memcmp(a.pixels, b.pixels, (size_t)a.width * (size_t)a.height) != 0) {
-        if (cli->stride)
-          st = lsm_fail(err, LSM_ERR_INPUT, path,
-                        "differs from the truth slice %s, which --stride %d makes an input: was "
-                        "the result made from slices %zu, %zu, %zu, ... of %s?",
-                        truth[k], cli->stride, first + 1, first + 1 + (size_t)cli->stride,
-                        first + 1 + 2 * (size_t)cli->stride, cli->truth_dir);
-        else
-          st = lsm_fail(err, LSM_ERR_INPUT, path,
-                        "differs from the truth slice %s, which run.json's input heights make "
-                        "an input, the first input taken as truth slice %zu (--first N if it "
-                        "is slice N): was the result made from slices of %s?",
-                        truth[k], first + 1, cli->truth_dir);
-      }
-      lsm_mask_free(&a);
-      lsm_mask_free(&b);
-      continue;
-    }
-    lsm_slice_score s;
-    if (st == LSM_OK) st = lsm_score_slice(&a, &b, row_step, &s, &pool, &pool_n, &pool_cap, err);
-    if (st == LSM_OK && per) {
-      per[count] = s;
-      per_at[count] = k;
-    }
-    if (st == LSM_OK) {
-      dice += s.dice;
-      vol_r += (double)s.area_result;
-      vol_t += (double)s.area_truth;
-      inter += s.dice * (double)(s.area_result + s.area_truth) / 2.0;
-      incomparable += !s.comparable;
-      if (has_distances(&s)) {
-        hd95 += s.hd95;
-        msd += s.mean_surface;
-        measured++;
-      }
-      count++;
+      if (st == LSM_OK) st = check_input_back(cli, path, truth[k], &a, &b, first, err);
+    } else {
+      lsm_slice_score s;
+      if (st == LSM_OK)
+        st = lsm_score_slice(&a, &b, row_step, &s, &sums.pool, &sums.pool_n, &sums.pool_cap, err);
+      if (st == LSM_OK) add_score(&sums, &s, k);
     }
     lsm_mask_free(&a);
     lsm_mask_free(&b);
   }
-  double pooled = lsm_quantile(pool, pool_n, 0.95);
-  free(pool);
+  const double pooled = lsm_quantile(sums.pool, sums.pool_n, 0.95);
+  free(sums.pool);
   if (st == LSM_OK) {
-    if (first == 1)
-      fprintf(stderr, "lsmorph: note: truth slice 1 lies before the first kept slice (2) and is "
-                      "not scored\n");
-    else if (first > 1)
-      fprintf(stderr,
-              "lsmorph: note: truth slices 1 to %zu lie before the first kept slice (%zu) and are "
-              "not scored\n",
-              first, first + 1);
-    if (last + 2 == n)
-      fprintf(stderr,
-              "lsmorph: note: truth slice %zu lies past the last kept slice (%zu) and is not "
-              "scored (nothing is extrapolated past it)\n",
-              n, last + 1);
-    else if (last + 2 < n)
-      fprintf(stderr,
-              "lsmorph: note: truth slices %zu to %zu lie past the last kept slice (%zu) and are "
-              "not scored (nothing is extrapolated past it)\n",
-              last + 2, n, last + 1);
-    /* undefined scores (no held-out slice, no boundary on both sides, an empty
-     * truth) are JSON null, as in run.json */
-    printf("{\"held_out\": %zu, \"dice_volume\": ", count);
-    lsm_json_number(stdout, vol_r + vol_t > 0 ? 2.0 * inter / (vol_r + vol_t) : 1.0);
-    printf(", \"dice\": ");
-    lsm_json_number(stdout, count ? dice / (double)count : NAN);
-    printf(", \"hd95\": ");
-    lsm_json_number(stdout, measured ? hd95 / (double)measured : NAN);
-    printf(", \"hd95_pooled\": ");
-    lsm_json_number(stdout, pooled);
-    printf(", \"mean_surface\": ");
-    lsm_json_number(stdout, measured ? msd / (double)measured : NAN);
-    printf(", \"volume_error\": ");
-    lsm_json_number(stdout, vol_t > 0 ? (vol_r - vol_t) / vol_t : NAN);
-    printf(", \"one_sided_empty\": %zu", incomparable);
-    if (per) {
-      printf(", \"slices\": [");
-      for (size_t i = 0, below = 0; i < count; ++i) {
-        const lsm_slice_score *p = &per[i];
-        while (below + 1 < n_kept && kept[below + 1] < per_at[i]) ++below;
-        printf("%s{\"truth\": %zu, \"file\": ", i ? ", " : "", per_at[i] + 1);
-        lsm_json_string(stdout, lsm_base_name(truth[per_at[i]]));
-        printf(", \"between\": [%zu, %zu], \"dice\": ", kept[below] + 1, kept[below + 1] + 1);
-        lsm_json_number(stdout, p->dice);
-        printf(", \"hd95\": ");
-        lsm_json_number(stdout, has_distances(p) ? p->hd95 : NAN);
-        printf(", \"mean_surface\": ");
-        lsm_json_number(stdout, has_distances(p) ? p->mean_surface : NAN);
-        printf(", \"area_result\": %zu, \"area_truth\": %zu}", p->area_result, p->area_truth);
-      }
-      printf("]");
-    }
-    printf("}\n");
+    note_unscored(n, first, last);
+    print_scores(&sums, pooled, truth, kept, n_kept);
   }
   lsm_path_list_free(truth, n);
   free(kept);
-  free(per);
-  free(per_at);
+  free(sums.per);
+  free(sums.per_at);
   return st;
 }

@@ -1,5 +1,7 @@
 #include "solver/base/lsm_grid.h"
 
+#include "solver/base/lsm_flood.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -171,36 +173,14 @@ float lsm_grid_sample(const lsm_grid *g, double x, double y) {
   return (float)((1 - fy) * ((1 - fx) * v00 + fx * v10) + fy * ((1 - fx) * v01 + fx * v11));
 }
 
-void lsm_grid_spread_labels(const lsm_grid *phi, float level, int nx, int ny, int32_t *label,
-                            int32_t *queue, size_t tail) {
-  for (size_t head = 0; head < tail;) {
-    const int32_t q = queue[head++];
-    const int i = q % nx, j = q / nx;
-    for (int dj = -1; dj <= 1; ++dj)
-      for (int di = -1; di <= 1; ++di) {
-        const int a = i + di, b = j + dj;
-        if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
-        const size_t t = (size_t)b * nx + a;
-        if (label[t] >= 0 || (phi && LSM_AT(phi, a, b) > level)) continue;
-        label[t] = label[q];
-        queue[tail++] = (int32_t)t;
-      }
-  }
-}
-
 int32_t lsm_grid_label_components(const lsm_grid *phi, float level, int32_t *label,
                                   int32_t *queue) {
   const int nx = phi->nx, ny = phi->ny;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) label[(size_t)j * nx + i] = LSM_AT(phi, i, j) <= level ? -1 : -2;
+  const int32_t count = lsm_flood_components(label, nx, ny, 8, -1, 0, queue);
   const size_t n = (size_t)nx * (size_t)ny;
-  for (size_t k = 0; k < n; ++k) label[k] = -1;
-  int32_t count = 0;
-  for (int j0 = 0; j0 < ny; ++j0)
-    for (int i0 = 0; i0 < nx; ++i0) {
-      const size_t start = (size_t)j0 * nx + i0;
-      if (label[start] >= 0 || LSM_AT(phi, i0, j0) > level) continue;
-      label[start] = count++;
-      queue[0] = (int32_t)start;
-      lsm_grid_spread_labels(phi, level, nx, ny, label, queue, 1);
-    }
+  for (size_t k = 0; k < n; ++k)
+    if (label[k] < 0) label[k] = -1;
   return count;
 }

@@ -76,14 +76,9 @@ float lsm_grid_sample(const lsm_grid *grid, double x, double y);
 
 /* Connected components (8-neighbours) of {phi <= level} over the interior:
  * label[i + j nx] = the component (0, 1, ... in row-major order of their first
- * cell) or -1; returns the count.  label and queue hold nx * ny entries. */
+ * cell) or -1; returns the count.  label and queue hold nx * ny entries.
+ * (lsm_flood labels other images.) */
 int32_t lsm_grid_label_components(const lsm_grid *phi, float level, int32_t *label,
                                   int32_t *queue);
-/* Breadth-first spread of labels over an nx x ny image: each cell of
- * queue[0 .. tail) passes its label to its unlabelled (-1) 8-neighbours, and
- * they to theirs; with phi, only to cells with phi <= level.  queue holds
- * nx * ny cells. */
-void lsm_grid_spread_labels(const lsm_grid *phi, float level, int nx, int ny, int32_t *label,
-                            int32_t *queue, size_t tail);
 
 #endif

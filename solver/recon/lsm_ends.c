@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/base/lsm_flood.h"
+
 static int compare_float(const void *x, const void *y) {
   const float a = *(const float *)x, b = *(const float *)y;
   return (a > b) - (a < b);
@@ -168,7 +170,7 @@ static lsm_status end_parts_find(const lsm_grid *full, const lsm_grid *nb, doubl
   size_t tail = 0;
   for (size_t k = 0; k < n; ++k)
     if (e->region[k] >= 0) queue[tail++] = (int32_t)k;
-  lsm_grid_spread_labels(NULL, 0.0f, nx, ny, e->region, queue, tail);
+  lsm_flood(e->region, nx, ny, 8, -1, queue, tail);
   free(queue);
   free(label_n);
   return LSM_OK;

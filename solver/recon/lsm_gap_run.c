@@ -77,7 +77,7 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
   const lsm_slice *a = w->s[1], *b = w->s[2];
   const size_t cells = (size_t)r->width * (size_t)r->height;
   lsm_pinhole_fill fill = {a, b, NULL, NULL, NULL, NULL};
-  fill.cls = lsm_alloc(cells, 1, err, "hole marks");
+  fill.cls = lsm_alloc(cells, sizeof *fill.cls, err, "hole marks");
   fill.queue = fill.cls ? lsm_alloc(cells, sizeof *fill.queue, err, "hole queue") : NULL;
   if (!fill.queue) {
     free(fill.cls);

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/base/lsm_flood.h"
+
 /* Slices with more components than this are left alone (noise, not parts). */
 #define LSM_PARTS_COMPONENTS 256
 
@@ -22,42 +24,27 @@ static void label_parts(const lsm_mask *m, const lsm_mask *other, int32_t *label
                         part *parts, int *n) {
   const int w = m->width, h = m->height;
   const size_t cells = (size_t)w * (size_t)h;
-  for (size_t k = 0; k < cells; ++k) label[k] = -1;
-  *n = 0;
-  for (size_t start = 0; start < cells; ++start) {
-    if (!m->pixels[start] || label[start] >= 0) continue;
-    if (*n == LSM_PARTS_COMPONENTS) {
-      *n = -1;
-      return;
+  for (size_t k = 0; k < cells; ++k) label[k] = m->pixels[k] ? -1 : -2;
+  const int32_t count = lsm_flood_components(label, w, h, 8, -1, 0, queue);
+  *n = count > LSM_PARTS_COMPONENTS ? -1 : (int)count;
+  for (int c = 0; c < *n; ++c) parts[c] = (part){0, 0.0, 0.0, 1};
+  for (size_t k = 0; k < cells; ++k) {
+    const int32_t c = label[k];
+    if (c < 0) {
+      label[k] = -1;
+      continue;
     }
-    part *p = &parts[*n];
-    double sx = 0.0, sy = 0.0;
-    int overlaps = 0, border = 0;
-    size_t head = 0, tail = 0;
-    label[start] = *n;
-    queue[tail++] = (int32_t)start;
-    while (head < tail) {
-      const int32_t q = queue[head++];
-      const int x = (int)(q % w), y = (int)(q / w);
-      sx += x;
-      sy += y;
-      overlaps |= other->pixels[q] != 0;
-      border |= x == 0 || y == 0 || x == w - 1 || y == h - 1;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int xn = x + dx, yn = y + dy;
-          if (xn < 0 || yn < 0 || xn >= w || yn >= h) continue;
-          const size_t t = (size_t)yn * (size_t)w + (size_t)xn;
-          if (!m->pixels[t] || label[t] >= 0) continue;
-          label[t] = *n;
-          queue[tail++] = (int32_t)t;
-        }
-    }
-    p->area = tail;
-    p->cx = sx / (double)tail;
-    p->cy = sy / (double)tail;
-    p->free = !overlaps && !border;
-    ++*n;
+    if (*n < 0) continue;
+    const int x = (int)(k % (size_t)w), y = (int)(k / (size_t)w);
+    part *p = &parts[c];
+    p->area++;
+    p->cx += x; /* sums of whole numbers: exact in any order */
+    p->cy += y;
+    if (other->pixels[k] || x == 0 || y == 0 || x == w - 1 || y == h - 1) p->free = 0;
+  }
+  for (int c = 0; c < *n; ++c) {
+    parts[c].cx /= (double)parts[c].area;
+    parts[c].cy /= (double)parts[c].area;
   }
 }
 

@@ -4,33 +4,16 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* Classes of a cell for mark_enclosed. */
-enum { CELL_INSIDE, CELL_OUTSIDE, CELL_OPEN, CELL_REACHED };
+#include "solver/base/lsm_flood.h"
+
+/* Classes of a cell for mark_enclosed (a label image, lsm_flood): the
+ * outside is open to the flood from the border and from the open cells. */
+enum { CELL_REACHED = 0, CELL_OUTSIDE = -1, CELL_INSIDE = -2, CELL_OPEN = -3 };
 
 /* The class of a sample of phi: inside (phi <= 0), outside, or outside and
  * at least `thin` from the inside (open by itself). */
-static inline uint8_t cell_class(float phi, float thin) {
+static inline int32_t cell_class(float phi, float thin) {
   return phi <= 0.0f ? CELL_INSIDE : phi >= thin ? CELL_OPEN : CELL_OUTSIDE;
-}
-
-/* Breadth-first flood over 4-neighbours: from the cells queue[0 .. tail)
- * (already set to `to`) into every cell of class `from` or `from_too`, each
- * set to `to` and appended to queue.  Returns the new tail. */
-static size_t flood4(uint8_t *cls, int nx, int ny, int32_t *queue, size_t tail, uint8_t from,
-                     uint8_t from_too, uint8_t to) {
-  for (size_t head = 0; head < tail;) {
-    const int32_t k = queue[head++];
-    const int i = k % nx, j = k / nx;
-    const int ni[4] = {i - 1, i + 1, i, i}, nj[4] = {j, j, j - 1, j + 1};
-    for (int q = 0; q < 4; ++q) {
-      if (ni[q] < 0 || nj[q] < 0 || ni[q] >= nx || nj[q] >= ny) continue;
-      const int32_t m = nj[q] * nx + ni[q];
-      if (cls[m] != from && cls[m] != from_too) continue;
-      cls[m] = to;
-      queue[tail++] = m;
-    }
-  }
-  return tail;
 }
 
 /* The enclosed outside of an nx x ny image of cell classes: the 4-connected
@@ -39,7 +22,7 @@ static size_t flood4(uint8_t *cls, int nx, int ny, int32_t *queue, size_t tail, 
  * lsm_grid_label_components, so an outside closed by a diagonal step of the
  * inside is closed.)  On return cls[k] is 1 on those cells and 0 elsewhere;
  * queue holds nx * ny cells.  Returns the number of cells marked. */
-static size_t mark_enclosed(uint8_t *cls, int nx, int ny, int32_t *queue) {
+static size_t mark_enclosed(int32_t *cls, int nx, int ny, int32_t *queue) {
   const size_t n = (size_t)nx * (size_t)ny;
   size_t tail = 0;
   for (size_t k = 0; k < n; ++k) {
@@ -50,29 +33,33 @@ static size_t mark_enclosed(uint8_t *cls, int nx, int ny, int32_t *queue) {
       queue[tail++] = (int32_t)k;
     }
   }
-  flood4(cls, nx, ny, queue, tail, CELL_OUTSIDE, CELL_OPEN, CELL_REACHED);
+  lsm_flood(cls, nx, ny, 4, CELL_OUTSIDE, queue, tail);
   size_t marked = 0;
   for (size_t k = 0; k < n; ++k) {
     cls[k] = cls[k] == CELL_OUTSIDE;
-    marked += cls[k];
+    marked += (size_t)cls[k];
   }
   return marked;
 }
 
 /* Marks (hole[k] = 1) the cells of phi's pinholes: the enclosed outside
  * components of phi that lie everywhere less than `thin` from the inside.
- * queue holds nx * ny cells.  Returns the number of cells marked. */
-static size_t mark_pinholes(const lsm_grid *phi, float thin, uint8_t *hole, int32_t *queue) {
+ * cls and queue hold nx * ny cells.  Returns the number of cells marked. */
+static size_t mark_pinholes(const lsm_grid *phi, float thin, uint8_t *hole, int32_t *cls,
+                            int32_t *queue) {
   const int nx = phi->nx, ny = phi->ny;
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i)
-      hole[(size_t)j * (size_t)nx + (size_t)i] = cell_class(LSM_AT(phi, i, j), thin);
-  return mark_enclosed(hole, nx, ny, queue);
+      cls[(size_t)j * (size_t)nx + (size_t)i] = cell_class(LSM_AT(phi, i, j), thin);
+  const size_t marked = mark_enclosed(cls, nx, ny, queue);
+  const size_t n = (size_t)nx * (size_t)ny;
+  for (size_t k = 0; k < n; ++k) hole[k] = (uint8_t)cls[k];
+  return marked;
 }
 
 /* Whether a slice's region has a hole: an outside component that does not
  * reach the image border.  cls and queue hold width x height cells. */
-int lsm_mask_has_hole(const lsm_mask *m, uint8_t *cls, int32_t *queue) {
+int lsm_mask_has_hole(const lsm_mask *m, int32_t *cls, int32_t *queue) {
   const size_t n = (size_t)m->width * (size_t)m->height;
   for (size_t k = 0; k < n; ++k) cls[k] = m->pixels[k] ? CELL_INSIDE : CELL_OUTSIDE;
   return mark_enclosed(cls, m->width, m->height, queue) > 0;
@@ -88,15 +75,14 @@ lsm_status lsm_pinholes_fill(lsm_pinhole_fill *f, const lsm_stack_opts *o, int w
   const size_t most = (size_t)o->rules.pinhole_fill_cells;
   const int nx = width, ny = height;
   const size_t n = (size_t)nx * (size_t)ny;
-  uint8_t *cls = f->cls;
-  int32_t *queue = f->queue;
+  int32_t *cls = f->cls, *queue = f->queue;
   for (size_t k = 0; k < n; ++k) cls[k] = cell_class(out[k], thin);
   if (mark_enclosed(cls, nx, ny, queue) == 0) return LSM_OK;
   for (size_t start = 0; start < n; ++start) {
     if (cls[start] != 1) continue;
     cls[start] = 2; /* one hole at a time: its cells 1 -> 2 */
     queue[0] = (int32_t)start;
-    const size_t tail = flood4(cls, nx, ny, queue, 1, 1, 1, 2);
+    const size_t tail = lsm_flood(cls, nx, ny, 4, 1, queue, 1);
     if (tail > most) continue;
     if (!f->phi_a) {
       const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
@@ -126,20 +112,23 @@ lsm_status lsm_pinholes_find(const lsm_grid *phi_a, const lsm_grid *phi_b, float
   const float thin = thin_px * fmaxf(phi_a->dx, phi_a->dy);
   uint8_t *hole_a = lsm_alloc(cells, 1, err, "pinholes");
   uint8_t *hole_b = hole_a ? lsm_alloc(cells, 1, err, "pinholes") : NULL;
-  int32_t *queue = hole_b ? lsm_alloc(cells, sizeof *queue, err, "pinholes") : NULL;
+  int32_t *cls = hole_b ? lsm_alloc(cells, sizeof *cls, err, "pinholes") : NULL;
+  int32_t *queue = cls ? lsm_alloc(cells, sizeof *queue, err, "pinholes") : NULL;
   if (!queue) {
     free(hole_a);
     free(hole_b);
+    free(cls);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  const size_t marked = mark_pinholes(phi_a, thin, hole_a, queue) +
-                        mark_pinholes(phi_b, thin, hole_b, queue);
+  const size_t marked = mark_pinholes(phi_a, thin, hole_a, cls, queue) +
+                        mark_pinholes(phi_b, thin, hole_b, cls, queue);
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const size_t k = (size_t)j * (size_t)nx + (size_t)i;
       hole_a[k] = LSM_AT(phi_a, i, j) > 0.0f ? hole_a[k] : hole_b[k];
     }
   free(hole_b);
+  free(cls);
   free(queue);
   if (marked) *pinhole = hole_a;
   else free(hole_a);

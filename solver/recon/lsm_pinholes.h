@@ -23,14 +23,13 @@
  * first pinhole). */
 typedef struct lsm_pinhole_fill {
   const lsm_slice *a, *b;
-  uint8_t *cls;
-  int32_t *queue;
+  int32_t *cls, *queue;
   lsm_grid *phi_a, *phi_b;
 } lsm_pinhole_fill;
 
 /* Whether a slice's region has a hole: an outside component that does not
  * reach the image border.  cls and queue hold width x height cells. */
-int lsm_mask_has_hole(const lsm_mask *m, uint8_t *cls, int32_t *queue);
+int lsm_mask_has_hole(const lsm_mask *m, int32_t *cls, int32_t *queue);
 
 /* Fills the pinholes of out, an output slice (width x height) of the gap
  * between f->a and f->b: holes of at most o->rules.pinhole_fill_cells cells,

@@ -20,6 +20,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/base/lsm_flood.h"
+
 #ifdef _OPENMP
 #include <omp.h>
 #define LSM_OMP(directive) _Pragma(#directive)
@@ -304,7 +306,7 @@ lsm_status lsm_outline_fill(const lsm_mask *outline, lsm_mask *filled, lsm_err *
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "outline fill: bad arguments");
   const int W = outline->width, H = outline->height;
   size_t npix;
-  if (!lsm_size_mul((size_t)W, (size_t)H, &npix) || npix >= (size_t)NO_LABEL)
+  if (!lsm_size_mul((size_t)W, (size_t)H, &npix) || npix > (size_t)INT32_MAX)
     return lsm_fail(err, LSM_ERR_LIMIT, NULL, "outline fill: %dx%d image is too large", W, H);
   if (filled->pixels) {
     if (filled->width != W || filled->height != H)
@@ -313,8 +315,8 @@ lsm_status lsm_outline_fill(const lsm_mask *outline, lsm_mask *filled, lsm_err *
   }
   const uint8_t *in = outline->pixels;
 
-  uint32_t *label = lsm_alloc(npix, sizeof *label, err, "outline fill");
-  uint32_t *queue = label ? lsm_alloc(npix, sizeof *queue, err, "outline fill") : NULL;
+  int32_t *label = lsm_alloc(npix, sizeof *label, err, "outline fill");
+  int32_t *queue = label ? lsm_alloc(npix, sizeof *queue, err, "outline fill") : NULL;
   uint32_t *start = NULL, *depth = NULL, *cqueue = NULL;
   lsm_status st = LSM_OK;
   if (!queue) {
@@ -322,32 +324,16 @@ lsm_status lsm_outline_fill(const lsm_mask *outline, lsm_mask *filled, lsm_err *
     goto done;
   }
 
-  /* 1. Connected components, breadth first. */
-  for (size_t k = 0; k < npix; ++k) label[k] = NO_LABEL;
+  /* 1. Connected components (lsm_flood): contours 8-connected (unlabelled:
+   * -2), background 4-connected (-1), numbered in row-major order. */
+  for (size_t k = 0; k < npix; ++k) label[k] = in[k] ? -2 : -1;
   uint32_t ncomp = 0;
   for (size_t seed = 0; seed < npix; ++seed) {
-    if (label[seed] != NO_LABEL) continue;
-    const uint8_t kind = in[seed] != 0;
-    /* contours: 8 neighbours; background: the first 4 (edge neighbours) */
-    static const int di[8] = {1, -1, 0, 0, 1, 1, -1, -1};
-    static const int dj[8] = {0, 0, 1, -1, 1, -1, 1, -1};
-    const int nnb = kind ? 8 : 4;
-    size_t head = 0, tail = 0;
-    label[seed] = ncomp;
-    queue[tail++] = (uint32_t)seed;
-    while (head < tail) {
-      const uint32_t p = queue[head++];
-      const int i = (int)(p % (uint32_t)W), j = (int)(p / (uint32_t)W);
-      for (int m = 0; m < nnb; ++m) {
-        const int ii = i + di[m], jj = j + dj[m];
-        if (ii < 0 || ii >= W || jj < 0 || jj >= H) continue;
-        const size_t q = (size_t)jj * (size_t)W + (size_t)ii;
-        if (label[q] != NO_LABEL || (in[q] != 0) != kind) continue;
-        label[q] = ncomp;
-        queue[tail++] = (uint32_t)q;
-      }
-    }
-    ++ncomp;
+    if (label[seed] >= 0) continue;
+    const int32_t open = label[seed];
+    label[seed] = (int32_t)ncomp++;
+    queue[0] = (int32_t)seed;
+    lsm_flood(label, W, H, open == -2 ? 8 : 4, open, queue, 1);
   }
 
   /* 2. Group the pixels by component (counting sort into queue[]): the
@@ -363,7 +349,7 @@ lsm_status lsm_outline_fill(const lsm_mask *outline, lsm_mask *filled, lsm_err *
   for (size_t k = 0; k < npix; ++k) ++start[label[k] + 1];
   for (uint32_t c = 0; c < ncomp; ++c) start[c + 1] += start[c];
   /* place with start[c] as the cursor, then shift the cursors back */
-  for (size_t k = 0; k < npix; ++k) queue[start[label[k]]++] = (uint32_t)k;
+  for (size_t k = 0; k < npix; ++k) queue[start[label[k]]++] = (int32_t)k;
   for (uint32_t c = ncomp; c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
 
@@ -379,7 +365,7 @@ lsm_status lsm_outline_fill(const lsm_mask *outline, lsm_mask *filled, lsm_err *
       for (int i = 0; i < W; i += step) {
         const size_t k = (size_t)j * (size_t)W + (size_t)i;
         if ((in[k] != 0) != (pass == 1)) continue;
-        const uint32_t c = label[k];
+        const uint32_t c = (uint32_t)label[k];
         if (depth[c] != NO_LABEL) continue;
         depth[c] = (uint32_t)pass;
         cqueue[ctail++] = c;
@@ -391,13 +377,13 @@ lsm_status lsm_outline_fill(const lsm_mask *outline, lsm_mask *filled, lsm_err *
     const int is_contour = in[queue[start[c]]] != 0;
     const uint32_t next = is_contour ? depth[c] : depth[c] + 1;
     for (uint32_t m = start[c]; m < start[c + 1]; ++m) {
-      const uint32_t p = queue[m];
+      const uint32_t p = (uint32_t)queue[m];
       const int i = (int)(p % (uint32_t)W), j = (int)(p / (uint32_t)W);
       const size_t nb[4] = {p - 1, p + 1, p - (size_t)W, p + (size_t)W};
       const int ok[4] = {i > 0, i < W - 1, j > 0, j < H - 1};
       for (int m4 = 0; m4 < 4; ++m4) {
         if (!ok[m4]) continue;
-        const uint32_t cq = label[nb[m4]];
+        const uint32_t cq = (uint32_t)label[nb[m4]];
         if (depth[cq] != NO_LABEL) continue; /* includes cq == c */
         depth[cq] = next;
         cqueue[ctail++] = cq;
