@@ -58,7 +58,7 @@ lsm_status lsm_outputs_open(lsm_outputs *o, const lsm_cli *cli, const char *dir,
    * neighbouring slice */
   if (cli->mesh)
     LSM_TRY(lsm_mesh_open(width, height, pixel_dx, pixel_dy, o->per_iteration ? 0.0 : o->dz,
-                          &o->mesh, err));
+                          dir, &o->mesh, err));
   if (cli->preview)
     LSM_TRY(lsm_preview_open(width, height, pixel_dx, pixel_dy, o->dz, &o->preview, err));
   char path[4200];

@@ -8,6 +8,8 @@
 #include <string.h>
 
 #include "io/lsm_io.h"
+#include "io/lsm_preview.h"
+#include "io/lsm_slice_worker.h"
 #include "solver/app/lsm_checks.h"
 #include "solver/app/lsm_inputs.h"
 #include "solver/app/lsm_out_dir.h"
@@ -225,6 +227,9 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   if (st == LSM_OK && !lsm_signals_caught()) lsm_signals_install(1);
   if (st == LSM_OK) st = lsm_out_dir_begin(&out_dir, cli->out_dir, err);
   if (st == LSM_OK) st = lsm_outputs_open(&out, cli, out_dir.tmp, width, height, z[0], err);
+  /* the 3D preview is drawn as the slices come when their heights are known ahead */
+  if (st == LSM_OK && out.preview && !cli->stack.per_iteration)
+    st = lsm_preview_expect(out.preview, z[0], z[src.count - 1], err);
   if (st == LSM_OK) {
     if (!cli->quiet)
       fprintf(stderr, "lsmorph: %zu slices of %dx%d from %s, method %s, %d threads\n", src.count,
@@ -233,9 +238,15 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
     lsm_progress progress = lsm_progress_bar_start(&bar, t_start);
     lsm_slice_source source = lsm_slice_files_source(&src, z);
     lsm_slice_sink sink = lsm_outputs_sink(&out);
-    lsm_slice_sink stoppable = lsm_signals_stoppable(&sink);
-    st = lsm_stack_run(&source, width, height, &cli->stack, &stoppable, stats,
-                       cli->quiet ? NULL : &progress, err);
+    /* the outputs are written on a thread of their own, while the solver goes on */
+    lsm_slice_worker *writer = NULL;
+    st = lsm_slice_worker_open(sink.emit, sink.ctx, width, height, (size_t)64 << 20, &writer, err);
+    lsm_slice_sink queued = {writer, lsm_slice_worker_emit};
+    lsm_slice_sink stoppable = lsm_signals_stoppable(&queued);
+    if (st == LSM_OK)
+      st = lsm_stack_run(&source, width, height, &cli->stack, &stoppable, stats,
+                         cli->quiet ? NULL : &progress, err);
+    st = lsm_slice_worker_close(&writer, st, err);
     if (st == LSM_ERR_NUMERIC) name_failed_pair(err, &src, stats);
   }
   st = lsm_outputs_finish(&out, st, err);
