@@ -81,18 +81,20 @@ lsm_status lsm_png_write_rgb8(const char *path, const uint8_t *pixels, int width
 
 /* Reads a one-page TIFF into a binary mask by the rule of lsm_png_read_mask
  * (opts as there).  Gray (white or black is zero), gray + alpha, RGB and
- * RGBA in strips at 1, 8 or 16 bits a sample are read sample for sample, so
- * 16-bit label masks stored as 0/1 keep their values (opts->nonzero); every
- * other layout libtiff decodes (palette, YCbCr, tiles, separate planes, 2 or
- * 4 bits) is read as 8-bit RGBA.  Refused: several pages (one slice a
- * file), floating-point or signed samples, 16-bit samples outside strips. */
+ * RGBA in strips or tiles at 1, 8 or 16 bits a sample are read sample for
+ * sample, so 16-bit label masks stored as 0/1 keep their values
+ * (opts->nonzero); every other layout libtiff decodes (palette, YCbCr,
+ * separate planes, 2 or 4 bits) is read as 8-bit RGBA.  The file is read,
+ * not mapped.  Refused (LSM_ERR_INPUT, "corrupt TIFF: " and libtiff's
+ * message): a file libtiff reports an error on, even one it recovers from,
+ * or a warning on while decoding the pixels (a cut or garbled strip or tile,
+ * a missing one).  Refused as well: several pages (one slice a file),
+ * floating-point or signed samples, 16-bit samples in other layouts. */
 lsm_status lsm_tiff_read_mask(const char *path, const lsm_image_read_opts *opts, lsm_mask *out,
                               lsm_err *err);
 /* The same from an open, seekable stream positioned at the TIFF header
  * (fmemopen() memory: the fuzzer uses it); name is used in messages.  The
- * stream is read but not closed.  libtiff reads a stream without mapping it,
- * and then refuses small tiles (16 x 16 at 8 bits: "Invalid tile byte
- * count"), which it reads from a file. */
+ * stream is read but not closed. */
 lsm_status lsm_tiff_read_mask_stream(FILE *fp, const char *name, const lsm_image_read_opts *opts,
                                      lsm_mask *out, lsm_err *err);
 /* Reads only the size, refusing (LSM_ERR_LIMIT) more than max_pixels pixels
@@ -342,6 +344,12 @@ int lsm_json_find_numbers(const char *text, const char *const *keys, int count, 
  * may be NULL with capacity 0, to learn n. */
 int lsm_json_find_strings(const char *text, const char *const *keys, int count, const char **raw,
                           size_t *raw_lengths, size_t capacity, size_t *n, size_t *error_at);
+
+/* The same for one string (run.json's lsmorph_version): *raw points into
+ * text at the bytes between its quotes, *raw_length bytes, escapes
+ * unresolved; either may be NULL. */
+int lsm_json_find_string(const char *text, const char *const *keys, int count, const char **raw,
+                         size_t *raw_length, size_t *error_at);
 
 /* Resolves the escapes of a JSON string's raw bytes (length of them) into
  * out, which must hold length + 1 bytes (nothing grows); NUL-terminated.  As

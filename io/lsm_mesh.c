@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* Padded planes are numbered p = 0 (the pad below the first slice), 1..N (the
  * slices), N+1 (the pad above).  Slab s lies between planes s and s+1; it is
@@ -13,7 +14,12 @@
  * ring of 4 planes suffices.  Grid edges go from a node to the node + d with
  * d in {x, y, xy} (in a plane) or {z, xz, yz, xyz} (across a slab), keyed by
  * their lower node: 3 index planes per padded plane (two kept: the slab's
- * bottom and top) and 4 per slab. */
+ * bottom and top) and 4 per slab.
+ *
+ * A slab's triangles use vertices of its own and of the slab below (those on
+ * its bottom plane's edges), so only the vertices made since the slab below
+ * began stay in memory (the window); every vertex and triangle goes to its
+ * scratch stream, in the PLY's own bytes, as it is made. */
 
 #define RING 4
 
@@ -33,10 +39,13 @@ struct lsm_mesh {
   int closed;
   int failed;
   /* the mesh */
-  float *v;             /* 6 floats per vertex */
-  size_t nv, cap_v;
-  uint32_t *t;          /* 3 indices per triangle */
-  size_t nt, cap_t;
+  size_t nv, nt;        /* vertices and triangles made */
+  float *win;           /* 6 floats per vertex from index win_base on */
+  size_t win_base, win_n, win_cap;
+  size_t slab_start;    /* nv when the slab below the current one began */
+  FILE *vertices, *triangles; /* scratch streams, unlinked, PLY bytes */
+  char scratch_dir[4096];
+  int scratch_errno;    /* a failed scratch write: its errno */
 };
 
 /* ---- building planes ----------------------------------------------------------------------- */
@@ -83,6 +92,54 @@ static int grow(void **buf, size_t *cap, size_t need, size_t elem) {
   *buf = p;
   *cap = nc;
   return 1;
+}
+
+/* ---- the scratch streams ------------------------------------------------------------------- */
+
+/* u little endian at b, as PLY's binary_little_endian stores it. */
+static void put_u32(unsigned char *b, uint32_t u) {
+  b[0] = (unsigned char)(u & 0xffu);
+  b[1] = (unsigned char)((u >> 8) & 0xffu);
+  b[2] = (unsigned char)((u >> 16) & 0xffu);
+  b[3] = (unsigned char)((u >> 24) & 0xffu);
+}
+
+static int scratch_write(lsm_mesh *m, FILE *f, const unsigned char *b, size_t n) {
+  if (fwrite(b, 1, n, f) == n) return 1;
+  if (!m->scratch_errno) m->scratch_errno = errno ? errno : EIO;
+  m->failed = 1;
+  return 0;
+}
+
+/* An unlinked scratch file in dir: nothing is left behind, whatever ends the run. */
+static FILE *scratch_open(const char *dir) {
+  char path[4200];
+  if (snprintf(path, sizeof path, "%s/.lsmorph-mesh-XXXXXX", dir) >= (int)sizeof path) {
+    errno = ENAMETOOLONG;
+    return NULL;
+  }
+  const int fd = mkstemp(path);
+  if (fd < 0) return NULL;
+  unlink(path);
+  FILE *f = fdopen(fd, "w+b");
+  if (!f) {
+    const int e = errno;
+    close(fd);
+    errno = e;
+    return NULL;
+  }
+  setvbuf(f, NULL, _IOFBF, (size_t)1 << 20);
+  return f;
+}
+
+/* Forgets the vertices made before the slab below the one starting now. */
+static void window_advance(lsm_mesh *m) {
+  const size_t drop = m->slab_start - m->win_base;
+  if (drop > 0 && m->win_n > drop) /* (no window yet: nothing to move) */
+    memmove(m->win, m->win + drop * 6, (m->win_n - drop) * 6 * sizeof(float));
+  m->win_n -= drop;
+  m->win_base = m->slab_start;
+  m->slab_start = m->nv;
 }
 
 /* ---- gradients and vertices ------------------------------------------------------------------ */
@@ -189,18 +246,27 @@ static int32_t edge_vertex(lsm_mesh *m, int i, int j, long p, int d, int32_t *sl
     n[2] = s * (zb - za);
     len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   }
-  if (m->nv >= (size_t)INT32_MAX || !grow((void **)&m->v, &m->cap_v, (m->nv + 1) * 6, sizeof(float))) {
+  if (m->nv >= (size_t)INT32_MAX ||
+      !grow((void **)&m->win, &m->win_cap, (m->win_n + 1) * 6, sizeof(float))) {
     m->failed = 1;
     return -1;
   }
-  float *o = m->v + m->nv * 6;
+  float *o = m->win + m->win_n * 6;
   o[0] = (float)(xa + t * (xb - xa));
   o[1] = (float)(ya + t * (yb - ya));
   o[2] = (float)(za + t * (zb - za));
   o[3] = (float)(n[0] / len);
   o[4] = (float)(n[1] / len);
   o[5] = (float)(n[2] / len);
+  unsigned char bytes[24];
+  for (int c = 0; c < 6; ++c) {
+    uint32_t u;
+    memcpy(&u, &o[c], sizeof u);
+    put_u32(bytes + 4 * c, u);
+  }
+  if (!scratch_write(m, m->vertices, bytes, sizeof bytes)) return -1;
   *slot = (int32_t)m->nv;
+  m->win_n++;
   m->nv++;
   return *slot;
 }
@@ -210,15 +276,13 @@ static void emit_triangle(lsm_mesh *m, int32_t a, int32_t b, int32_t c) {
     m->failed = 1;
     return;
   }
-  if (!grow((void **)&m->t, &m->cap_t, (m->nt + 1) * 3, sizeof(uint32_t))) {
-    m->failed = 1;
-    return;
-  }
-  uint32_t *o = m->t + m->nt * 3;
-  o[0] = (uint32_t)a;
-  o[1] = (uint32_t)b;
-  o[2] = (uint32_t)c;
-  m->nt++;
+  /* PLY face: the count 3, then the three indices */
+  unsigned char bytes[13];
+  bytes[0] = 3;
+  put_u32(bytes + 1, (uint32_t)a);
+  put_u32(bytes + 5, (uint32_t)b);
+  put_u32(bytes + 9, (uint32_t)c);
+  if (scratch_write(m, m->triangles, bytes, sizeof bytes)) m->nt++;
 }
 
 /* ---- one slab ------------------------------------------------------------------------------ */
@@ -267,7 +331,7 @@ static int det_sign(int a, int b, int c, int d) {
 }
 
 static double dist2(const lsm_mesh *m, int32_t a, int32_t b) {
-  const float *p = m->v + (size_t)a * 6, *q = m->v + (size_t)b * 6;
+  const float *p = m->win + ((size_t)a - m->win_base) * 6, *q = m->win + ((size_t)b - m->win_base) * 6;
   double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
   return dx * dx + dy * dy + dz * dz;
 }
@@ -327,6 +391,7 @@ static void mesh_tet(cube_ctx *c, const int q[4], const int in[4]) {
 
 static void mesh_slab(lsm_mesh *m, long s) {
   const size_t w = (size_t)m->w;
+  window_advance(m);
   /* the top plane's in-plane edges are new; the bottom's carry over */
   for (int d = 0; d < 3; ++d)
     for (size_t k = 0; k < m->plane_n; ++k) m->eplane[(s + 1) & 1][d][k] = -1;
@@ -358,10 +423,10 @@ static void mesh_slab(lsm_mesh *m, long s) {
 
 /* ---- the public functions ---------------------------------------------------------------------- */
 
-lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad, lsm_mesh **out,
-                         lsm_err *err) {
+lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad,
+                         const char *scratch_dir, lsm_mesh **out, lsm_err *err) {
   if (out) *out = NULL;
-  if (!out) return lsm_fail(err, LSM_ERR_INTERNAL, "mesh", "bad arguments");
+  if (!out || !scratch_dir) return lsm_fail(err, LSM_ERR_INTERNAL, "mesh", "bad arguments");
   if (nx <= 0 || ny <= 0 || nx > INT32_MAX - 2 || ny > INT32_MAX - 2)
     return lsm_fail(err, LSM_ERR_INPUT, "mesh", "slice size %dx%d is not usable", nx, ny);
   if (!(isfinite(sx) && sx > 0 && isfinite(sy) && sy > 0 && isfinite(dz_pad) && dz_pad >= 0))
@@ -384,6 +449,15 @@ lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad, ls
   m->dz_pad = dz_pad;
   m->top = -1;
   m->pad_top = -1;
+  snprintf(m->scratch_dir, sizeof m->scratch_dir, "%s", scratch_dir);
+  m->vertices = scratch_open(scratch_dir);
+  if (m->vertices) m->triangles = scratch_open(scratch_dir);
+  if (!m->triangles) {
+    const int e = errno;
+    lsm_mesh_free(&m);
+    return lsm_fail(err, LSM_ERR_IO, scratch_dir, "cannot create the mesh's scratch file: %s",
+                    strerror(e));
+  }
   int ok = 1;
   for (int k = 0; k < RING; ++k) ok &= (m->plane[k] = malloc(n * sizeof(float))) != NULL;
   for (int p = 0; p < 2; ++p)
@@ -403,6 +477,9 @@ lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad, ls
 
 static lsm_status mesh_status(lsm_mesh *m, lsm_err *err) {
   if (!m->failed) return LSM_OK;
+  if (m->scratch_errno)
+    return lsm_fail(err, LSM_ERR_IO, m->scratch_dir, "mesh scratch file: write failed: %s",
+                    strerror(m->scratch_errno));
   if (m->nv >= (size_t)INT32_MAX)
     return lsm_fail(err, LSM_ERR_LIMIT, "mesh", "more than %d vertices", INT32_MAX);
   return lsm_fail(err, LSM_ERR_NOMEM, "mesh", "cannot grow the mesh (%zu vertices, %zu triangles)",
@@ -454,78 +531,67 @@ lsm_status lsm_mesh_close(lsm_mesh *m, lsm_err *err) {
 
 size_t lsm_mesh_vertex_count(const lsm_mesh *m) { return m ? m->nv : 0; }
 size_t lsm_mesh_triangle_count(const lsm_mesh *m) { return m ? m->nt : 0; }
-const float *lsm_mesh_vertices(const lsm_mesh *m) { return m ? m->v : NULL; }
-const uint32_t *lsm_mesh_triangles(const lsm_mesh *m) { return m ? m->t : NULL; }
 
 /* ---- PLY ------------------------------------------------------------------------------------- */
 
-typedef struct out_buf {
-  FILE *f;
-  unsigned char b[1 << 16];
-  size_t n;
-  int bad;
-} out_buf;
-
-static void ob_flush(out_buf *o) {
-  if (o->n && !o->bad && fwrite(o->b, 1, o->n, o->f) != o->n) o->bad = 1;
-  o->n = 0;
+/* Appends the whole scratch stream src to out through buf. */
+static int copy_scratch(FILE *src, FILE *out, unsigned char *buf, size_t size, int *read_errno) {
+  if (fflush(src) != 0 || fseeko(src, 0, SEEK_SET) != 0) {
+    *read_errno = errno;
+    return 0;
+  }
+  for (;;) {
+    const size_t n = fread(buf, 1, size, src);
+    if (n && fwrite(buf, 1, n, out) != n) return 0;
+    if (n < size) break;
+  }
+  if (ferror(src)) {
+    *read_errno = errno ? errno : EIO;
+    return 0;
+  }
+  return 1;
 }
 
-static void ob_u32(out_buf *o, uint32_t u) {
-  if (o->n + 4 > sizeof o->b) ob_flush(o);
-  o->b[o->n++] = (unsigned char)(u & 0xffu);
-  o->b[o->n++] = (unsigned char)((u >> 8) & 0xffu);
-  o->b[o->n++] = (unsigned char)((u >> 16) & 0xffu);
-  o->b[o->n++] = (unsigned char)((u >> 24) & 0xffu);
-}
-
-static void ob_f32(out_buf *o, float f) {
-  uint32_t u;
-  memcpy(&u, &f, sizeof u);
-  ob_u32(o, u);
-}
-
-lsm_status lsm_mesh_write_ply(const lsm_mesh *m, const char *path, lsm_err *err) {
+lsm_status lsm_mesh_write_ply(lsm_mesh *m, const char *path, lsm_err *err) {
   if (!m || !path) return lsm_fail(err, LSM_ERR_INTERNAL, path, "bad arguments to write a mesh");
-  out_buf *o = malloc(sizeof *o);
-  if (!o) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate a write buffer");
-  o->n = 0;
-  o->bad = 0;
-  o->f = fopen(path, "wb");
-  if (!o->f) {
-    free(o);
+  if (m->failed || !m->closed)
+    return lsm_fail(err, LSM_ERR_INTERNAL, path, "the mesh is not closed, or failed");
+  const size_t size = (size_t)1 << 20;
+  unsigned char *buf = malloc(size);
+  if (!buf) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate a copy buffer");
+  FILE *f = fopen(path, "wb");
+  if (!f) {
+    free(buf);
     return lsm_fail(err, LSM_ERR_IO, path, "cannot create: %s", strerror(errno));
   }
-  if (fprintf(o->f,
-              "ply\n"
-              "format binary_little_endian 1.0\n"
-              "comment lsmorph: zero level set of the signed distance, physical units\n"
-              "comment x = column * pixel width, y = row * pixel height, z = height; normals "
-              "point outward\n"
-              "element vertex %zu\n"
-              "property float x\n"
-              "property float y\n"
-              "property float z\n"
-              "property float nx\n"
-              "property float ny\n"
-              "property float nz\n"
-              "element face %zu\n"
-              "property list uchar int vertex_indices\n"
-              "end_header\n",
-              m->nv, m->nt) < 0)
-    o->bad = 1;
-  for (size_t k = 0; k < m->nv * 6 && !o->bad; ++k) ob_f32(o, m->v[k]);
-  for (size_t k = 0; k < m->nt && !o->bad; ++k) {
-    if (o->n + 1 > sizeof o->b) ob_flush(o);
-    o->b[o->n++] = 3;
-    for (int c = 0; c < 3; ++c) ob_u32(o, m->t[k * 3 + (size_t)c]);
-  }
-  ob_flush(o);
+  int bad = fprintf(f,
+                    "ply\n"
+                    "format binary_little_endian 1.0\n"
+                    "comment lsmorph: zero level set of the signed distance, physical units\n"
+                    "comment x = column * pixel width, y = row * pixel height, z = height; "
+                    "normals point outward\n"
+                    "element vertex %zu\n"
+                    "property float x\n"
+                    "property float y\n"
+                    "property float z\n"
+                    "property float nx\n"
+                    "property float ny\n"
+                    "property float nz\n"
+                    "element face %zu\n"
+                    "property list uchar int vertex_indices\n"
+                    "end_header\n",
+                    m->nv, m->nt) < 0;
+  int read_errno = 0;
+  bad = bad || !copy_scratch(m->vertices, f, buf, size, &read_errno) ||
+        !copy_scratch(m->triangles, f, buf, size, &read_errno);
   int e = errno;
-  int bad = o->bad || ferror(o->f);
-  int closed = fclose(o->f);
+  bad = bad || ferror(f);
+  const int closed = fclose(f);
   if (!bad && closed != 0) e = errno;
-  free(o);
+  free(buf);
+  if (read_errno)
+    return lsm_fail(err, LSM_ERR_IO, m->scratch_dir, "mesh scratch file: read failed: %s",
+                    strerror(read_errno));
   if (bad || closed != 0) return lsm_fail(err, LSM_ERR_IO, path, "write failed: %s", strerror(e));
   return LSM_OK;
 }
@@ -537,8 +603,9 @@ void lsm_mesh_free(lsm_mesh **mp) {
   for (int p = 0; p < 2; ++p)
     for (int d = 0; d < 3; ++d) free(m->eplane[p][d]);
   for (int d = 0; d < 4; ++d) free(m->eslab[d]);
-  free(m->v);
-  free(m->t);
+  free(m->win);
+  if (m->vertices) fclose(m->vertices);
+  if (m->triangles) fclose(m->triangles);
   free(m);
   *mp = NULL;
 }

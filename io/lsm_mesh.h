@@ -25,8 +25,11 @@
  * ends, so a node where phi is exactly 0 gives no triangles of zero area.
  *
  * Coordinates are physical: x = column * sx, y = row * sy, z = the slice's
- * height.  Memory: four padded slices and ten edge-index planes, plus the
- * mesh itself (held in growable arrays until written).
+ * height.  Memory: four padded slices, ten edge-index planes and the
+ * vertices of the last two slabs, whatever the slice count: every vertex and
+ * triangle is written, as made, to one of two scratch files (unlinked, so
+ * none is left behind) in the folder given, until the PLY is written; the
+ * scratch holds about the PLY's size on disk until the mesh is freed.
  */
 #ifndef LSM_MESH_H
 #define LSM_MESH_H
@@ -40,9 +43,10 @@ typedef struct lsm_mesh lsm_mesh;
 
 /* Starts a mesh of nx x ny slices with pixel spacings sx, sy; dz_pad is the
  * distance of the pad layers below the first and above the last slice, or 0
- * for the step to the neighbouring slice at each end (uneven heights). */
-lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad, lsm_mesh **out,
-                         lsm_err *err);
+ * for the step to the neighbouring slice at each end (uneven heights).  The
+ * scratch files go to scratch_dir (the output folder, beside the PLY). */
+lsm_status lsm_mesh_open(int nx, int ny, double sx, double sy, double dz_pad,
+                         const char *scratch_dir, lsm_mesh **out, lsm_err *err);
 /* Adds the next slice (nx*ny floats, row-major, row 0 first) at height z;
  * heights must increase.  Meshes the slab below it as soon as it can. */
 lsm_status lsm_mesh_add_slice(lsm_mesh *m, const float *phi, double z, lsm_err *err);
@@ -50,14 +54,12 @@ lsm_status lsm_mesh_add_slice(lsm_mesh *m, const float *phi, double z, lsm_err *
  * slice must have been added. */
 lsm_status lsm_mesh_close(lsm_mesh *m, lsm_err *err);
 /* Writes the closed mesh as binary little-endian PLY: vertex x y z nx ny nz
- * (float), face vertex_indices (uchar count, int indices). */
-lsm_status lsm_mesh_write_ply(const lsm_mesh *m, const char *path, lsm_err *err);
+ * (float), face vertex_indices (uchar count, int indices): the header with
+ * the counts, then the two scratch files' bytes. */
+lsm_status lsm_mesh_write_ply(lsm_mesh *m, const char *path, lsm_err *err);
 
 size_t lsm_mesh_vertex_count(const lsm_mesh *m);
 size_t lsm_mesh_triangle_count(const lsm_mesh *m);
-/* Direct access: 6 floats per vertex (x y z nx ny nz), 3 indices per triangle. */
-const float *lsm_mesh_vertices(const lsm_mesh *m);
-const uint32_t *lsm_mesh_triangles(const lsm_mesh *m);
 
 void lsm_mesh_free(lsm_mesh **m);
 

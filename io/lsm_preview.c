@@ -3,12 +3,14 @@
 #include "io/lsm_preview.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "io/lsm_io.h"
+#include "io/lsm_preview_render.h"
 
 #define KEEP_MAX 64   /* thumbnails kept (even) */
 #define SHOW_MAX 16   /* thumbnails shown */
@@ -40,6 +42,14 @@ struct lsm_preview {
   double z0, step;
   float *prev, *cur;
   double prev_z;
+  /* preview3d.png, drawn as the planes arrive when the heights were expected */
+  lsm_render *render;
+  int drawn;           /* cells below plane `drawn` are drawn */
+  int expected_planes; /* the framing's (0: none expected) */
+  /* one row of block sums, for thumbnails and decimation */
+  uint32_t *row_in;
+  double *row_sum;
+  uint32_t *row_n;
 };
 
 /* ---- set-up ----------------------------------------------------------------------------------- */
@@ -76,6 +86,9 @@ lsm_status lsm_preview_open(int nx, int ny, double sx, double sy, double dz, lsm
   ok &= (p->vol = malloc((size_t)LSM_PREVIEW_Z * p->plane_n * sizeof(float))) != NULL;
   ok &= (p->prev = malloc(p->plane_n * sizeof(float))) != NULL;
   ok &= (p->cur = malloc(p->plane_n * sizeof(float))) != NULL;
+  ok &= (p->row_in = malloc((size_t)p->tw * sizeof *p->row_in)) != NULL;
+  ok &= (p->row_sum = malloc((size_t)p->dnx * sizeof *p->row_sum)) != NULL;
+  ok &= (p->row_n = malloc((size_t)p->dnx * sizeof *p->row_n)) != NULL;
   if (!ok) {
     lsm_preview_free(&p);
     return lsm_fail(err, LSM_ERR_NOMEM, "preview", "cannot allocate the preview buffers");
@@ -92,43 +105,67 @@ void lsm_preview_free(lsm_preview **pp) {
   free(p->vol);
   free(p->prev);
   free(p->cur);
+  free(p->row_in);
+  free(p->row_sum);
+  free(p->row_n);
+  lsm_render_free(&p->render);
   free(p);
   *pp = NULL;
 }
 
+static void draw_arrived(lsm_preview *p);
+
 /* ---- streaming ---------------------------------------------------------------------------------- */
 
+/* The fraction inside (phi <= 0) of each g x g block, 0..255, a row of
+ * blocks at a time. */
 static void make_thumb(const lsm_preview *p, const float *phi, uint8_t *cov) {
   const int g = p->g;
+  const size_t nx = (size_t)p->nx;
+  if (g == 1) {
+    for (size_t k = 0; k < nx * (size_t)p->ny; ++k) cov[k] = phi[k] <= 0.0f ? 255 : 0;
+    return;
+  }
+  uint32_t *in = p->row_in;
   for (int tj = 0; tj < p->th; ++tj) {
+    memset(in, 0, (size_t)p->tw * sizeof *in);
+    const int j1 = (tj + 1) * g < p->ny ? (tj + 1) * g : p->ny;
+    for (int j = tj * g; j < j1; ++j) {
+      const float *row = phi + (size_t)j * nx;
+      for (int i = 0; i < p->nx; ++i) in[i / g] += row[i] <= 0.0f;
+    }
     for (int ti = 0; ti < p->tw; ++ti) {
-      int in = 0, all = 0;
-      for (int j = tj * g; j < (tj + 1) * g && j < p->ny; ++j)
-        for (int i = ti * g; i < (ti + 1) * g && i < p->nx; ++i) {
-          in += phi[(size_t)j * (size_t)p->nx + (size_t)i] <= 0.0f;
-          all++;
-        }
-      cov[(size_t)tj * (size_t)p->tw + (size_t)ti] = (uint8_t)(all ? (255 * in + all / 2) / all : 0);
+      const int cols = (ti + 1) * g < p->nx ? g : p->nx - ti * g;
+      const uint32_t all = (uint32_t)cols * (uint32_t)(j1 - tj * g);
+      cov[(size_t)tj * (size_t)p->tw + (size_t)ti] = (uint8_t)((255 * in[ti] + all / 2) / all);
     }
   }
 }
 
+/* The mean of the finite values of each f x f block (1e30 where none is),
+ * a row of blocks at a time. */
 static void decimate(const lsm_preview *p, const float *phi, float *out) {
   const int f = p->f;
+  const size_t nx = (size_t)p->nx;
+  if (f == 1) {
+    for (size_t k = 0; k < nx * (size_t)p->ny; ++k) out[k] = isfinite(phi[k]) ? phi[k] : 1e30f;
+    return;
+  }
+  double *sum = p->row_sum;
+  uint32_t *n = p->row_n;
   for (int b = 0; b < p->dny; ++b) {
-    for (int a = 0; a < p->dnx; ++a) {
-      double sum = 0;
-      int n = 0;
-      for (int j = b * f; j < (b + 1) * f && j < p->ny; ++j)
-        for (int i = a * f; i < (a + 1) * f && i < p->nx; ++i) {
-          float v = phi[(size_t)j * (size_t)p->nx + (size_t)i];
-          if (isfinite(v)) {
-            sum += v;
-            n++;
-          }
+    memset(sum, 0, (size_t)p->dnx * sizeof *sum);
+    memset(n, 0, (size_t)p->dnx * sizeof *n);
+    for (int j = b * f; j < (b + 1) * f && j < p->ny; ++j) {
+      const float *row = phi + (size_t)j * nx;
+      for (int i = 0; i < p->nx; ++i)
+        if (isfinite(row[i])) {
+          sum[i / f] += row[i];
+          n[i / f]++;
         }
-      out[(size_t)b * (size_t)p->dnx + (size_t)a] = n ? (float)(sum / n) : 1e30f;
     }
+    for (int a = 0; a < p->dnx; ++a)
+      out[(size_t)b * (size_t)p->dnx + (size_t)a] = n[a] ? (float)(sum[a] / n[a]) : 1e30f;
   }
 }
 
@@ -172,6 +209,7 @@ lsm_status lsm_preview_add_slice(lsm_preview *p, const float *phi, double z, lon
   /* decimated volume, resampled at heights z0 + m * step */
   decimate(p, phi, p->cur);
   if (k == 0) {
+    if (p->render && z != p->z0) lsm_render_free(&p->render); /* not the height expected */
     p->z0 = z;
     memcpy(p->vol, p->cur, p->plane_n * sizeof(float));
     p->nplanes = 1;
@@ -179,7 +217,8 @@ lsm_status lsm_preview_add_slice(lsm_preview *p, const float *phi, double z, lon
     for (;;) {
       double zt = p->z0 + p->nplanes * p->step;
       if (zt > z) break;
-      if (p->nplanes == LSM_PREVIEW_Z) {
+      if (p->nplanes == LSM_PREVIEW_Z) { /* (the expected framing no longer holds) */
+        lsm_render_free(&p->render);
         for (int q = 0; 2 * q < p->nplanes; ++q)
           memmove(p->vol + (size_t)q * p->plane_n, p->vol + (size_t)(2 * q) * p->plane_n,
                   p->plane_n * sizeof(float));
@@ -198,6 +237,7 @@ lsm_status lsm_preview_add_slice(lsm_preview *p, const float *phi, double z, lon
   p->cur = t;
   p->prev_z = z;
   p->count++;
+  draw_arrived(p);
   return LSM_OK;
 }
 
@@ -217,8 +257,17 @@ static void put(image *im, int x, int y, int r, int g, int b) {
 }
 
 static void fill(image *im, int x0, int y0, int w, int h, int r, int g, int b) {
-  for (int y = y0; y < y0 + h; ++y)
-    for (int x = x0; x < x0 + w; ++x) put(im, x, y, r, g, b);
+  const int x1 = x0 + w < im->w ? x0 + w : im->w, y1 = y0 + h < im->h ? y0 + h : im->h;
+  if (x0 < 0) x0 = 0;
+  if (y0 < 0) y0 = 0;
+  for (int y = y0; y < y1; ++y) {
+    uint8_t *o = im->px + 3 * ((size_t)y * (size_t)im->w + (size_t)x0);
+    for (int x = x0; x < x1; ++x, o += 3) {
+      o[0] = (uint8_t)r;
+      o[1] = (uint8_t)g;
+      o[2] = (uint8_t)b;
+    }
+  }
 }
 
 /* 3x5 glyphs, rows top to bottom, 3 bits each (4 = left column). */
@@ -294,14 +343,14 @@ static lsm_status write_montage(lsm_preview *p, const char *path, lsm_err *err) 
       fill(&im, x0, y0, TW + 2 * F, TH + 2 * F, 255, 140, 0);
     else
       fill(&im, x0, y0, TW + 2 * F, TH + 2 * F, 120, 120, 126);
-    for (int y = 0; y < TH; ++y)
+    for (int y = 0; y < TH; ++y) {
+      const uint8_t *src = t->cov + (size_t)y * (size_t)p->th / (size_t)TH * (size_t)p->tw;
       for (int x = 0; x < TW; ++x) {
-        const size_t ty = (size_t)y * (size_t)p->th / (size_t)TH;
-        const size_t tx = (size_t)x * (size_t)p->tw / (size_t)TW;
-        int v = t->cov[ty * (size_t)p->tw + tx];
-        int gv = 12 + v * 218 / 255;
+        const int v = src[(size_t)x * (size_t)p->tw / (size_t)TW];
+        const int gv = 12 + v * 218 / 255;
         put(&im, x0 + F + x, y0 + F + y, gv, gv, gv);
       }
+    }
     char label[48];
     snprintf(label, sizeof label, "%zu z=%.4g", t->index + 1, t->z);
     int s = TW >= 120 ? 2 : 1;
@@ -323,284 +372,80 @@ static lsm_status write_montage(lsm_preview *p, const char *path, lsm_err *err) 
 
 /* ---- the 3D rendering ------------------------------------------------------------------------------ */
 
-#define MACRO 8 /* cells per macro cell (empty-space skipping) */
-
-typedef struct volume_view {
-  const float *vol;
-  int n[3];        /* dnx, dny, nplanes */
-  double o[3];     /* physical position of sample (0, 0, 0) */
-  double h[3];     /* sample spacing */
-  double lo[3], hi[3]; /* the box: samples +- half a spacing */
-  int m[3];        /* macro cells per axis */
-  uint8_t *occupied; /* per macro cell: some sample of it (ends included) <= 0 */
-} volume_view;
-
-/* Index of the cell (between samples i and i+1) holding sample coordinate u. */
-static inline int cell_of(const volume_view *v, int a, double u) {
-  int i = u <= 0 ? 0 : (int)u;
-  if (i > v->n[a] - 2) i = v->n[a] - 2;
-  return i < 0 ? 0 : i;
+static lsm_render_volume volume_of(const lsm_preview *p, int planes) {
+  lsm_render_volume v = {p->vol,
+                         {p->dnx, p->dny, planes},
+                         {0.5 * (p->f - 1) * p->sx, 0.5 * (p->f - 1) * p->sy, p->z0},
+                         {p->f * p->sx, p->f * p->sy, p->step}};
+  return v;
 }
 
-/* Marks the macro cells with an inside sample.  Trilinear interpolation inside
- * a cell whose 8 samples are all > 0 is > 0, so rays may jump over the others. */
-static int build_macro(volume_view *v) {
-  size_t count = 1;
-  for (int a = 0; a < 3; ++a) {
-    int cells = v->n[a] > 1 ? v->n[a] - 1 : 1;
-    v->m[a] = (cells + MACRO - 1) / MACRO;
-    count *= (size_t)v->m[a];
-  }
-  v->occupied = calloc(count, 1);
-  if (!v->occupied) return 0;
-  const size_t nx = (size_t)v->n[0], nxy = nx * (size_t)v->n[1];
-  for (int k = 0; k < v->n[2]; ++k)
-    for (int j = 0; j < v->n[1]; ++j)
-      for (int i = 0; i < v->n[0]; ++i) {
-        if (!(v->vol[(size_t)k * nxy + (size_t)j * nx + (size_t)i] <= 0.0f)) continue;
-        /* a sample on a macro boundary belongs to the macro cells on both sides */
-        int idx[3] = {i, j, k};
-        int lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) {
-          hi[a] = idx[a] / MACRO;
-          if (hi[a] >= v->m[a]) hi[a] = v->m[a] - 1;
-          lo[a] = idx[a] % MACRO == 0 && idx[a] > 0 ? idx[a] / MACRO - 1 : hi[a];
-        }
-        for (int c = lo[2]; c <= hi[2]; ++c)
-          for (int b = lo[1]; b <= hi[1]; ++b)
-            for (int a = lo[0]; a <= hi[0]; ++a)
-              v->occupied[((size_t)c * (size_t)v->m[1] + (size_t)b) * (size_t)v->m[0] + (size_t)a] = 1;
-      }
-  return 1;
+/* Draws the cells whose neighbour planes have all arrived, while slices
+ * still stream in (the framing is the expected one). */
+static void draw_arrived(lsm_preview *p) {
+  if (!p->render || p->nplanes - 2 <= p->drawn) return;
+  const lsm_render_volume v = volume_of(p, p->nplanes);
+  lsm_render_cells(p->render, &v, p->drawn, p->nplanes - 2, 0, 1);
+  p->drawn = p->nplanes - 2;
 }
 
-/* The macro cell holding physical point x: 1 if occupied; else 0 and, in
- * *t_exit, where the ray x + t d (t from t_now) leaves it. */
-static int macro_at(const volume_view *v, const double x[3], const double d[3], double t_now,
-                    double *t_exit) {
-  int mc[3];
-  double te = INFINITY;
-  for (int a = 0; a < 3; ++a) {
-    double u = (x[a] - v->o[a]) / v->h[a];
-    mc[a] = cell_of(v, a, u) / MACRO;
-    if (mc[a] >= v->m[a]) mc[a] = v->m[a] - 1;
+static lsm_status write_render(lsm_preview *p, lsm_err *err) {
+  const lsm_render_volume v = volume_of(p, p->nplanes);
+  /* the expected framing holds unless more planes came: else draw it all now */
+  if (p->render && !(p->nplanes <= p->expected_planes)) lsm_render_free(&p->render);
+  if (!p->render) {
+    p->drawn = 0;
+    if (!(p->render = lsm_render_new(&v)))
+      return lsm_fail(err, LSM_ERR_NOMEM, "preview", "cannot allocate the rendering");
   }
-  if (v->occupied[((size_t)mc[2] * (size_t)v->m[1] + (size_t)mc[1]) * (size_t)v->m[0] + (size_t)mc[0]])
-    return 1;
-  for (int a = 0; a < 3; ++a) {
-    if (fabs(d[a]) < 1e-12) continue;
-    /* the macro cell spans samples mc*MACRO .. (mc+1)*MACRO; the first and the
-     * last reach the box */
-    double lo = mc[a] == 0 ? v->lo[a] : v->o[a] + (double)(mc[a] * MACRO) * v->h[a];
-    double hi = mc[a] == v->m[a] - 1 ? v->hi[a] : v->o[a] + (double)((mc[a] + 1) * MACRO) * v->h[a];
-    double ta = ((d[a] > 0 ? hi : lo) - x[a]) / d[a];
-    if (ta < te) te = ta;
-  }
-  *t_exit = t_now + (te > 0 ? te : 0);
-  return 0;
-}
-
-/* Trilinear phi at a physical point (clamped to the samples). */
-static double sample(const volume_view *v, const double x[3]) {
-  int i0[3];
-  double fr[3];
-  for (int a = 0; a < 3; ++a) {
-    double u = (x[a] - v->o[a]) / v->h[a];
-    double umax = v->n[a] - 1;
-    if (u < 0) u = 0;
-    if (u > umax) u = umax;
-    int i = (int)u;
-    if (i > v->n[a] - 2) i = v->n[a] - 2;
-    if (i < 0) i = 0;
-    i0[a] = i;
-    fr[a] = v->n[a] > 1 ? u - i : 0.0;
-  }
-  const size_t nx = (size_t)v->n[0], nxy = nx * (size_t)v->n[1];
-  const int dx = v->n[0] > 1, dy = v->n[1] > 1, dz = v->n[2] > 1;
-  const float *b = v->vol + (size_t)i0[2] * nxy + (size_t)i0[1] * nx + (size_t)i0[0];
-  double c00 = b[0] + fr[0] * (b[dx] - b[0]);
-  double c10 = b[dy * nx] + fr[0] * (b[dy * nx + (size_t)dx] - b[dy * nx]);
-  const float *t = b + (size_t)dz * nxy;
-  double c01 = t[0] + fr[0] * (t[dx] - t[0]);
-  double c11 = t[dy * nx] + fr[0] * (t[dy * nx + (size_t)dx] - t[dy * nx]);
-  double c0 = c00 + fr[1] * (c10 - c00), c1 = c01 + fr[1] * (c11 - c01);
-  return c0 + fr[2] * (c1 - c0);
-}
-
-static void normalize3(double v[3]) {
-  double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  if (l > 0) {
-    v[0] /= l;
-    v[1] /= l;
-    v[2] /= l;
-  }
-}
-
-static lsm_status write_render(lsm_preview *p, const char *path, lsm_err *err) {
-  volume_view v;
-  v.vol = p->vol;
-  v.n[0] = p->dnx;
-  v.n[1] = p->dny;
-  v.n[2] = p->nplanes;
-  v.h[0] = p->f * p->sx;
-  v.h[1] = p->f * p->sy;
-  v.h[2] = p->step;
-  v.o[0] = 0.5 * (p->f - 1) * p->sx;
-  v.o[1] = 0.5 * (p->f - 1) * p->sy;
-  v.o[2] = p->z0;
-  for (int a = 0; a < 3; ++a) {
-    v.lo[a] = v.o[a] - 0.5 * v.h[a];
-    v.hi[a] = v.o[a] + (v.n[a] - 0.5) * v.h[a];
-  }
-  /* camera: oblique (from -x, +y), 25 degrees above, z up */
-  const double deg = 3.14159265358979323846 / 180.0;
-  const double az = 125.0 * deg, el = 25.0 * deg;
-  double d[3] = {-cos(el) * cos(az), -cos(el) * sin(az), -sin(el)}; /* view direction */
-  double r[3] = {d[1], -d[0], 0.0};                                   /* d x z */
-  normalize3(r);
-  double u[3] = {r[1] * d[2] - r[2] * d[1], r[2] * d[0] - r[0] * d[2], r[0] * d[1] - r[1] * d[0]};
-  double c[3], ext_r = 0, ext_u = 0;
-  for (int a = 0; a < 3; ++a) c[a] = 0.5 * (v.lo[a] + v.hi[a]);
-  for (int k = 0; k < 8; ++k) {
-    double q[3] = {(k & 1 ? v.hi[0] : v.lo[0]) - c[0], (k & 2 ? v.hi[1] : v.lo[1]) - c[1],
-                   (k & 4 ? v.hi[2] : v.lo[2]) - c[2]};
-    double pr = fabs(q[0] * r[0] + q[1] * r[1] + q[2] * r[2]);
-    double pu = fabs(q[0] * u[0] + q[1] * u[1] + q[2] * u[2]);
-    if (pr > ext_r) ext_r = pr;
-    if (pu > ext_u) ext_u = pu;
-  }
-  const double big = ext_r > ext_u ? ext_r : ext_u;
-  const double scale = big > 0 ? 280.0 / big : 1.0; /* pixels per unit */
-  image im;
-  im.w = (int)ceil(2 * ext_r * scale) + 64;
-  im.h = (int)ceil(2 * ext_u * scale) + 64;
-  if (im.w < 64) im.w = 64;
-  if (im.h < 64) im.h = 64;
-  im.px = malloc((size_t)im.w * (size_t)im.h * 3);
-  if (!im.px) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate the rendering");
-  double L[3] = {-d[0] + 0.6 * u[0] - 0.5 * r[0], -d[1] + 0.6 * u[1] - 0.5 * r[1],
-                 -d[2] + 0.6 * u[2] - 0.5 * r[2]};
-  normalize3(L);
-  if (!build_macro(&v)) {
-    free(im.px);
-    return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate the rendering");
-  }
-  double hmin = v.h[0] < v.h[1] ? v.h[0] : v.h[1];
-  if (v.h[2] < hmin) hmin = v.h[2];
-  const double fine = 0.4 * hmin;
-  /* rays start well outside the box, in its own units (a constant 1 lost all
-   * precision at pixel sizes of 1e-12 and below) */
-  const double far = 4.0 * (ext_r + ext_u) + hmin;
-  const int W = im.w, H = im.h;
-
-#pragma omp parallel for schedule(dynamic, 4)
-  for (int py = 0; py < H; ++py) {
-    for (int px = 0; px < W; ++px) {
-      double bg = 238 - 40.0 * py / H;
-      double col[3] = {bg, bg, bg + 4};
-      double sx = (px + 0.5 - 0.5 * W) / scale, sy = (0.5 * H - py - 0.5) / scale;
-      double o[3];
-      for (int a = 0; a < 3; ++a) o[a] = c[a] + sx * r[a] + sy * u[a] - far * d[a];
-      /* slab intersection with the box */
-      double t0 = -INFINITY, t1 = INFINITY;
-      int face = -1;
-      for (int a = 0; a < 3; ++a) {
-        if (fabs(d[a]) < 1e-12) {
-          if (o[a] < v.lo[a] || o[a] > v.hi[a]) t0 = INFINITY;
-          continue;
-        }
-        double ta = (v.lo[a] - o[a]) / d[a], tb = (v.hi[a] - o[a]) / d[a];
-        if (ta > tb) {
-          double t = ta;
-          ta = tb;
-          tb = t;
-        }
-        if (ta > t0) {
-          t0 = ta;
-          face = a;
-        }
-        if (tb < t1) t1 = tb;
-      }
-      if (t0 < t1 && face >= 0) {
-        double x[3], n[3] = {0, 0, 0};
-        int hit = 0;
-        for (int a = 0; a < 3; ++a) x[a] = o[a] + t0 * d[a];
-        double phi = sample(&v, x);
-        if (phi <= 0) { /* a cap on the volume's boundary */
-          hit = 1;
-          n[face] = d[face] > 0 ? -1.0 : 1.0;
-        } else {
-          double t = t0, tp = t0;
-          while (t < t1) {
-            tp = t;
-            double t_exit;
-            if (!macro_at(&v, x, d, t, &t_exit))
-              t = t_exit + 1e-9 * fine > t + fine ? t_exit + 1e-9 * fine : t + fine;
-            else
-              t += fine;
-            if (t > t1) t = t1;
-            for (int a = 0; a < 3; ++a) x[a] = o[a] + t * d[a];
-            phi = sample(&v, x);
-            if (phi <= 0) {
-              hit = 1;
-              break;
-            }
-            if (t >= t1) break;
-          }
-          if (hit) {
-            double ta = tp, tb = t;
-            for (int it = 0; it < 12; ++it) {
-              double tm = 0.5 * (ta + tb);
-              for (int a = 0; a < 3; ++a) x[a] = o[a] + tm * d[a];
-              if (sample(&v, x) <= 0)
-                tb = tm;
-              else
-                ta = tm;
-            }
-            for (int a = 0; a < 3; ++a) x[a] = o[a] + tb * d[a];
-            for (int a = 0; a < 3; ++a) {
-              double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
-              xp[a] += v.h[a];
-              xm[a] -= v.h[a];
-              n[a] = (sample(&v, xp) - sample(&v, xm)) / v.h[a];
-            }
-            normalize3(n);
-            if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0) {
-              n[0] = -n[0];
-              n[1] = -n[1];
-              n[2] = -n[2];
-            }
-          }
-        }
-        if (hit) {
-          double diff = n[0] * L[0] + n[1] * L[1] + n[2] * L[2];
-          if (diff < 0) diff = 0;
-          double rl[3]; /* reflected light */
-          for (int a = 0; a < 3; ++a) rl[a] = 2 * diff * n[a] - L[a];
-          double spec = -(rl[0] * d[0] + rl[1] * d[1] + rl[2] * d[2]);
-          spec = spec > 0 ? pow(spec, 24) : 0;
-          static const double base[3] = {0.86, 0.74, 0.58};
-          for (int a = 0; a < 3; ++a) {
-            double val = 255.0 * (base[a] * (0.16 + 0.84 * diff) + 0.22 * spec);
-            col[a] = val > 255 ? 255 : val;
-          }
-        }
-      }
-      uint8_t *out = im.px + 3 * ((size_t)py * (size_t)W + (size_t)px);
-      for (int a = 0; a < 3; ++a) out[a] = (uint8_t)(col[a] + 0.5);
-    }
-  }
-  free(v.occupied);
-  lsm_status st = lsm_png_write_rgb8(path, im.px, im.w, im.h, err);
-  free(im.px);
-  return st;
+  const int threads = omp_get_max_threads() > 0 ? omp_get_max_threads() : 1;
+  lsm_render_cells(p->render, &v, p->drawn, p->nplanes, 1, threads);
+  p->drawn = p->nplanes;
+  return LSM_OK;
 }
 
 lsm_status lsm_preview_write(lsm_preview *p, const char *montage_path, const char *render_path,
                              lsm_err *err) {
   if (!p) return lsm_fail(err, LSM_ERR_INTERNAL, "preview", "bad arguments to write");
   if (p->count == 0) return lsm_fail(err, LSM_ERR_INPUT, "preview", "no slices were added");
-  if (montage_path) LSM_TRY(write_montage(p, montage_path, err));
-  if (render_path) LSM_TRY(write_render(p, render_path, err));
+  if (render_path) LSM_TRY(write_render(p, err));
+  /* the two pictures are encoded side by side */
+  lsm_status st[2] = {LSM_OK, LSM_OK};
+  lsm_err errs[2];
+  lsm_err_clear(&errs[0]);
+  lsm_err_clear(&errs[1]);
+#pragma omp parallel sections num_threads(2)
+  {
+#pragma omp section
+    if (montage_path) st[0] = write_montage(p, montage_path, &errs[0]);
+#pragma omp section
+    if (render_path) {
+      int w, h;
+      const uint8_t *px = lsm_render_pixels(p->render, &w, &h);
+      st[1] = lsm_png_write_rgb8(render_path, px, w, h, &errs[1]);
+    }
+  }
+  for (int q = 0; q < 2; ++q)
+    if (st[q] != LSM_OK) {
+      if (err) *err = errs[q];
+      return st[q];
+    }
+  return LSM_OK;
+}
+
+lsm_status lsm_preview_expect(lsm_preview *p, double z_first, double z_last, lsm_err *err) {
+  if (!p || p->count > 0 || p->render)
+    return lsm_fail(err, LSM_ERR_INTERNAL, "preview", "heights expected after the first slice");
+  if (!(isfinite(z_first) && isfinite(z_last) && z_last >= z_first)) return LSM_OK;
+  /* the plane step the doubling would end with (see lsm_preview_add_slice) */
+  double planes = floor((z_last - z_first) / p->step * (1 + 1e-12)) + 1;
+  while (planes > LSM_PREVIEW_Z) {
+    p->step *= 2;
+    planes = floor((z_last - z_first) / p->step * (1 + 1e-12)) + 1;
+  }
+  p->z0 = z_first;
+  p->expected_planes = (int)planes;
+  const lsm_render_volume v = volume_of(p, p->expected_planes);
+  p->render = lsm_render_new(&v); /* none: all is drawn at the end */
   return LSM_OK;
 }

@@ -8,16 +8,22 @@
  *                 The sample is kept with a doubling stride: every stride-th
  *                 slice is kept, and when 64 are kept every other one is
  *                 dropped and the stride doubles (plus the last slice).
- *  preview3d.png  a shaded picture of the surface phi = 0: orthographic ray
- *                 marching of a decimated copy of the volume (at most
- *                 LSM_PREVIEW_XY samples across, at most LSM_PREVIEW_Z planes
- *                 high: planes are resampled at a regular height step, which
- *                 doubles when they would exceed the cap) seen obliquely from
- *                 above with z up, Lambert shading plus a little ambient and
- *                 specular light.  Rays step at 0.4 sample spacings (phi
- *                 need not be a distance) and jump over 8x8x8-cell blocks
- *                 without an inside sample.  The object is closed at the
- *                 volume's boundary (the caps are drawn flat).
+ *  preview3d.png  a shaded picture of the surface phi = 0, about 420 pixels
+ *                 across: orthographic ray marching of a decimated copy of
+ *                 the volume (at most LSM_PREVIEW_XY samples across, at most
+ *                 LSM_PREVIEW_Z planes high: planes are resampled at a
+ *                 regular height step, which doubles when they would exceed
+ *                 the cap) seen obliquely from above with z up, Lambert
+ *                 shading plus a little ambient and specular light, normals
+ *                 from central differences.  The cells where a ray can first
+ *                 meet the surface (both signs at their corners, and not
+ *                 receding from the viewer; or an inside corner on the
+ *                 volume's boundary) are splatted onto a depth buffer first:
+ *                 a ray marches only from where it enters the first of them
+ *                 to where it leaves the last, at 0.4 sample spacings (phi
+ *                 need not be a distance), and a pixel that meets none is
+ *                 background at once.  The object is closed at the volume's
+ *                 boundary (the caps are drawn flat).
  */
 #ifndef LSM_PREVIEW_H
 #define LSM_PREVIEW_H
@@ -35,6 +41,10 @@ typedef struct lsm_preview lsm_preview;
  * (used for the initial height step of the decimated copy). */
 lsm_status lsm_preview_open(int nx, int ny, double sx, double sy, double dz, lsm_preview **out,
                             lsm_err *err);
+/* The heights the slices will span, told before the first slice: the
+ * rendering is then framed at once and drawn as the slices arrive (else all
+ * at lsm_preview_write; it is also when the slices end up spanning more). */
+lsm_status lsm_preview_expect(lsm_preview *p, double z_first, double z_last, lsm_err *err);
 /* Adds the next slice (nx*ny floats, row-major, row 0 first) at height z
  * (increasing); input_index >= 0 marks a slice that reproduces an input. */
 lsm_status lsm_preview_add_slice(lsm_preview *p, const float *phi, double z, long input_index,

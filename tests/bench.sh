@@ -1,6 +1,7 @@
 #!/bin/sh
-# make bench: speed of the upwind update against NumPy, Roe-Fix, threads, and
-# peak memory of a reconstruction with 10 and 60 slices.
+# make bench: speed of the upwind update against NumPy, Roe-Fix, threads,
+# peak memory of a reconstruction with 10 and 60 slices, and the share of the
+# previews and slice PNGs in a default run.
 set -eu
 BUILD=${1:-build}
 PY=/usr/bin/python3
@@ -32,6 +33,33 @@ PYEOF
   echo "$n slices: peak RSS $kb KiB, $(printf %.2f "$sec") s"
 done
 awk -v a="$(cut -d' ' -f1 "$TMP/rss10.txt")" -v b="$(cut -d' ' -f1 "$TMP/rss60.txt")" 'BEGIN { r = b / a; printf "peak(60) / peak(10) = %.3f (target <= 1.25): %s\n", r, (r <= 1.25 ? "PASS" : "FAIL") }'
+
+echo
+echo "== previews and slice PNGs: share of a default run (the bunny, every 8th slice kept) =="
+# The same build with and without them, interleaved, median wall time of 9 runs each:
+# the share is (default - --no-preview --no-slices) / default.
+mkdir -p "$TMP/bunny8"
+ls examples/data/bunny/*.png | awk 'NR % 8 == 1' | xargs -I{} cp {} "$TMP/bunny8/"
+$PY - "$BUILD/lsmorph" "$TMP/bunny8" "$TMP/pv" <<'PYEOF'
+import shutil, statistics, subprocess, sys, time
+lsm, src, out = sys.argv[1:4]
+modes = {"default": [], "--no-slices": ["--no-slices"], "--no-preview": ["--no-preview"],
+         "neither": ["--no-preview", "--no-slices"]}
+wall = {m: [] for m in modes}
+for _ in range(9):
+    for m, extra in modes.items():
+        shutil.rmtree(out, ignore_errors=True)
+        t = time.perf_counter()
+        subprocess.run([lsm, "reconstruct", src, "-o", out, "--heights-from-names", "-q"] + extra, check=True)
+        wall[m].append(time.perf_counter() - t)
+med = {m: statistics.median(v) for m, v in wall.items()}
+for m in modes:
+    print("%-13s median %.3f s (min %.3f)" % (m, med[m], min(wall[m])))
+share = (med["default"] - med["neither"]) / med["default"]
+print("previews %.3f s, slice PNGs %.3f s; both: %.1f %% of the default run (target <= 10 %%): %s"
+      % (med["--no-slices"] - med["neither"], med["--no-preview"] - med["neither"], 100 * share,
+         "PASS" if share <= 0.10 else "FAIL"))
+PYEOF
 
 echo
 sh tests/bench_gaps.sh "$BUILD"

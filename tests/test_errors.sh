@@ -138,8 +138,8 @@ fi
 expect "slices of different sizes" 1 "sizes/3.png: slice is 40x40 but 1.png is 32x32" out reconstruct sizes -o out -q
 
 # ---- TIFF slices that cannot be read: each the second of two slices -----------------------------
-mkdir t-text t-cut t-pages t-float
-for d in t-text t-cut t-pages t-float; do cp good/1.png "$d/1.png"; done
+mkdir t-text t-cut t-pages t-float t-g4cut
+for d in t-text t-cut t-pages t-float t-g4cut; do cp good/1.png "$d/1.png"; done
 printf 'not a tiff' >t-text/2.tif
 /usr/bin/python3 - <<'PY'
 import numpy as np
@@ -151,11 +151,30 @@ data = open("t-cut/2.tif", "rb").read()
 open("t-cut/2.tif", "wb").write(data[: len(data) // 2])
 Image.fromarray(a).save("t-pages/2.tif", save_all=True, append_images=[Image.fromarray(a)])
 Image.fromarray(a.astype(np.float32)).save("t-float/2.tif")
+# a CCITT G4 slice cut in half, laid out directory first (as tifffile writes):
+# the directory stays readable and its byte count says what is left
+Image.fromarray(a).convert("1").save("t-g4cut/g4.tif", compression="group4")
+g4 = Image.open("t-g4cut/g4.tif")
+raw = open("t-g4cut/g4.tif", "rb").read()
+strip = b"".join(raw[o:o + n] for o, n in zip(g4.tag_v2[273], g4.tag_v2[279]))
+strip = strip[: len(strip) // 2]
+import struct
+tags = [(256, 4, 32), (257, 4, 32), (258, 3, 1), (259, 3, 4), (262, 3, 1), (273, 4, 0),
+        (277, 3, 1), (278, 4, 32), (279, 4, len(strip))]
+data_at = 8 + 2 + 12 * len(tags) + 4
+ifd = struct.pack("<H", len(tags)) + b"".join(
+    struct.pack("<HHI", t, k, 1) + (struct.pack("<HH", v, 0) if k == 3 else
+                                    struct.pack("<I", data_at if t == 273 else v))
+    for t, k, v in tags) + struct.pack("<I", 0)
+open("t-g4cut/2.tif", "wb").write(b"II*\0" + struct.pack("<I", 8) + ifd + strip)
+g4.close()
 PY
+rm -f t-g4cut/g4.tif
 expect "TIFF: not a TIFF" 1 "t-text/2.tif: cannot read as TIFF" out reconstruct t-text -o out -q
 expect "TIFF: cut in half" 1 "t-cut/2.tif: " out reconstruct t-cut -o out -q
 expect "TIFF: two pages" 1 "t-pages/2.tif: TIFF with several pages: give one slice a file" out reconstruct t-pages -o out -q
 expect "TIFF: float samples" 1 "t-float/2.tif: TIFF samples are floating point" out reconstruct t-float -o out -q
+expect "TIFF: cut CCITT G4 strip" 1 "t-g4cut/2.tif: corrupt TIFF: Premature EOF" out reconstruct t-g4cut -o out -q
 
 # ---- resource limits ----------------------------------------------------------------------------
 # A valid signature and IHDR of 200000 x 200000 pixels (CRC right) and nothing else:
@@ -305,6 +324,20 @@ cp -r r4 r4-uncounted && printf '{"input": {"folder": "tall4"}, "slices": 3}\n' 
 expect "score: a run.json without the input count" 1 \
   "r4-uncounted/run.json: does not say how many input slices the result was made from" - \
   score tall r4-uncounted --stride 4
+# run.json's counts are checked against the truth before they size anything: an
+# input count of 10^12 is refused at once (it once allocated 8 TB), and so are
+# more input heights than truth slices
+cp -r r4 r4-huge && sed 's/"slices": 3,/"slices": 1000000000000,/' r4/run.json >r4-huge/run.json
+expect "score: run.json's input count far above the truth's" 1 \
+  "r4-huge: was made from 1000000000000 slices (run.json), more than the 9 truth slices" - \
+  score tall r4-huge --stride 2
+cp -r r4 r4-heights && /usr/bin/python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["input"]["heights"] = [float(k) for k in range(12)]
+json.dump(d, open(sys.argv[1], "w"))' r4-heights/run.json
+expect "score: more input heights than truth slices" 1 \
+  "r4-heights/run.json: gives 12 input heights, more than the 9 truth slices: the result was not made from slices of tall" - score tall r4-heights
 # run.json is read as JSON: saved again by another tool (indented, members
 # reordered, the input count last) it still tells the stride
 cp -r r4 r4-resaved && /usr/bin/python3 -c '
@@ -445,7 +478,9 @@ else # root may write anywhere; /proc takes no new folders even from root
 fi
 sum=$(fingerprint good)
 expect "OUT is the input folder" 1 "good: is or contains the input folder" - reconstruct good -o good -q
-expect "OUT contains the input folder" 1 "is or contains the input folder good" - reconstruct good -o . -q
+mkdir -p holder && cp -r good holder/in
+expect "OUT contains the input folder" 1 "holder: is or contains the input folder holder/in" - \
+  reconstruct holder/in -o holder -q
 if [ "$(fingerprint good)" = "$sum" ]; then ok; else bad "the input folder was changed"; fi
 # a folder that is not an earlier result is never replaced: nor one holding the heights file
 mkdir -p mine && echo precious >mine/notes.txt && printf '0\n1\n2\n' >mine/z.txt

@@ -159,6 +159,30 @@ if [ $rc -eq 0 ]; then
   run_checks "$TMP/check5" "$PY" "$HELPER" check "$TMP/olfar" --spacing 1 1 1 --values sdf --mesh --caps
 fi
 
+# ---- the mesh streams: its memory does not grow with the slice count ------------------------
+# Three 256 x 256 slices of dots (radius 1.6 px, 6 px apart), 16 apart in height: 33 output
+# slices and a surface.ply of about 135 MB.  The run needs about 60 MB of address space with the
+# mesh streamed to scratch files, over 250 MB with the mesh held until written: it must pass
+# under a cap of 200 MB (left out under AddressSanitizer, which reserves terabytes).
+if grep -q -a "__asan_init" "$LSM"; then
+  echo "formats: note: the mesh memory check is left out under AddressSanitizer"
+else
+  check "dot slices written" "$PY" -c 'import sys, numpy as np
+from PIL import Image
+yy, xx = np.mgrid[0:256, 0:256]
+for k in range(3):
+    gx, gy = (xx - k) % 6 - 3, (yy - 2 * k) % 6 - 3
+    Image.fromarray(((gx * gx + gy * gy <= 2.6) * 255).astype(np.uint8)).save("%s/%d.png" % (sys.argv[1], k + 1))' "$(mkdir -p "$TMP/dots" && echo "$TMP/dots")"
+  (ulimit -v 200000 && exec "$LSM" reconstruct "$TMP/dots" -o "$TMP/dotsout" --spacing 16 --mesh \
+    --no-preview --no-slices --threads 2 -q) >"$TMP/log" 2>&1
+  rc=$?
+  check "--mesh on 33 slices of dots within 200 MB of address space exits 0 (got $rc: $(head -c 300 "$TMP/log"))" [ $rc -eq 0 ]
+  vertices=$(sed -n 's/^element vertex //p' "$TMP/dotsout/surface.ply" 2>/dev/null | head -n 1)
+  check "the dots' mesh is large: ${vertices:-no} vertices, over 2 million" [ "${vertices:-0}" -gt 2000000 ]
+  check "no mesh scratch file is left in OUT_DIR" sh -c '! ls -A "$1" 2>/dev/null | grep -q mesh-' _ "$TMP/dotsout"
+  rm -rf "$TMP/dotsout"
+fi
+
 # ---- defaults: volume.nrrd and the previews only; --no-preview ------------------------------
 "$LSM" reconstruct "$TMP/ball" -o "$TMP/def" --spacing 8 --no-slices -q >/dev/null 2>&1
 check "default run exits 0" [ $? -eq 0 ]

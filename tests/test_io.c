@@ -238,7 +238,9 @@ static void write_test_tiff(const char *path, const test_tiff *t) {
               for (int c = 0; c < t->spp; ++c) {
                 const size_t k = ((size_t)(y - ty) * 16 + (size_t)(x - tx)) * t->spp + (size_t)c;
                 const uint32_t v = t->sample(x, y, c);
-                if (bytes == 2) {
+                if (t->bits == 1) { /* 16 pixels: 2 bytes a tile row */
+                  if (v) tile[k >> 3] |= (uint8_t)(0x80u >> (k & 7));
+                } else if (bytes == 2) {
                   const uint16_t u = (uint16_t)v;
                   memcpy(tile + 2 * k, &u, 2);
                 } else {
@@ -319,6 +321,10 @@ static void test_tiff_layouts(void **state) {
       {"palette8.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, 0, 0, 0, 0, 1, index8}, 0},
       {"tiled8.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 1, 1, gray8}, 0},
       {"tiled-rgb8.tif", {8, 3, PHOTOMETRIC_RGB, 0, 0, 0, 0, 1, 1, rgb8}, 0},
+      {"tiled16.tif", {16, 1, PHOTOMETRIC_MINISBLACK, 0, COMPRESSION_LZW, 0, 0, 1, 1, label16}, 1},
+      {"tiled-bilevel.tif", {1, 1, PHOTOMETRIC_MINISWHITE, 0, COMPRESSION_CCITTFAX4, 0, 0, 1, 1, white_zero1}, 0},
+      {"tiled-palette8.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, COMPRESSION_LZW, 0, 0, 1, 1, index8}, 0},
+      {"tiled-palette8-raw.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, 0, 0, 0, 1, 1, index8}, 0},
   };
   for (size_t k = 0; k < sizeof good / sizeof good[0]; ++k)
     if (read_test_tiff(f->dir, good[k].name, &good[k].t, good[k].nonzero, &err) != LSM_OK)
@@ -349,7 +355,7 @@ static void test_tiff_layouts(void **state) {
   } bad[] = {
       {"stack.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 0, 2, gray8}, LSM_ERR_INPUT, "several pages"},
       {"float.tif", {32, 1, PHOTOMETRIC_MINISBLACK, 0, 0, SAMPLEFORMAT_IEEEFP, 0, 0, 1, gray8}, LSM_ERR_UNSUPPORTED, "floating point"},
-      {"tiled16.tif", {16, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 1, 1, label16}, LSM_ERR_UNSUPPORTED, "16-bit TIFF in tiles"},
+      {"planes16.tif", {16, 2, PHOTOMETRIC_MINISBLACK, PLANARCONFIG_SEPARATE, 0, 0, EXTRASAMPLE_UNASSALPHA, 0, 1, label16}, LSM_ERR_UNSUPPORTED, "16-bit TIFF in separate planes"},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
     const lsm_status st = read_test_tiff(f->dir, bad[k].name, &bad[k].t, 0, &err);

@@ -70,7 +70,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
       break;
     }
     case LSM_CMD_SCORE:
-      if (!cli.truth_dir || !cli.result_dir || cli.stride < 2) abort();
+      /* --stride is optional (0: the count comes from run.json), else 2 to 1000000 */
+      if (!cli.truth_dir || !cli.result_dir || !*cli.truth_dir || !*cli.result_dir) abort();
+      if (cli.stride != 0 && (cli.stride < 2 || cli.stride > 1000000)) abort();
+      if (cli.first < 0 || cli.first > 1000000000) abort();
       break;
     default:
       abort();
