@@ -124,47 +124,36 @@ static void test_score_options(void **state) {
   assert_non_null(strstr(err.msg, "--first"));
 }
 
+/* reconstruct in -o out OPT VALUE parsed into *cli (LSM_OK). */
+static void parse_option(lsm_cli *cli, const char *opt, const char *value) {
+  lsm_err err;
+  char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out", (char *)opt, (char *)value};
+  assert_int_equal(parse(cli, &err, 7, argv), LSM_OK);
+}
+
+/* Every name of an enum list (COUNT of them, NAME_OF each) given to OPT
+ * gives its value in FIELD. */
+#define EVERY_NAME(opt, count, name_of, field)                                 \
+  for (int k = 0; k < (count); ++k) {                                          \
+    parse_option(&cli, opt, name_of(k));                                       \
+    assert_int_equal(cli.field, k);                                            \
+  }
+
 /* Every name of every choice option's enum list is accepted and gives its
  * value; a name outside the list is refused with the list. */
 static void test_choices(void **state) {
   (void)state;
   lsm_cli cli;
   lsm_err err;
-  for (int k = 0; k < LSM_METHOD_COUNT; ++k) {
-    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--method",
-                    (char *)lsm_method_name((lsm_method)k)};
-    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
-    assert_int_equal(cli.stack.method, k);
-  }
-  for (int k = 0; k < LSM_ALIGN_COUNT; ++k) {
-    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
-                    "--align", (char *)lsm_align_name((lsm_align)k)};
-    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
-    assert_int_equal(cli.stack.align, k);
-  }
-  for (int k = 0; k < LSM_ENDS_COUNT; ++k) {
-    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
-                    "--ends", (char *)lsm_end_rule_name((lsm_end_rule)k)};
-    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
-    assert_int_equal(cli.stack.ends, k);
-  }
-  for (int k = 0; k < LSM_SCHEME_COUNT; ++k) {
-    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
-                    "--scheme", (char *)lsm_scheme_name((lsm_scheme)k)};
-    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
-    assert_int_equal(cli.stack.morph.scheme, k);
-  }
+  EVERY_NAME("--method", LSM_METHOD_COUNT, lsm_method_name, stack.method)
+  EVERY_NAME("--align", LSM_ALIGN_COUNT, lsm_align_name, stack.align)
+  EVERY_NAME("--ends", LSM_ENDS_COUNT, lsm_end_rule_name, stack.ends)
+  EVERY_NAME("--scheme", LSM_SCHEME_COUNT, lsm_scheme_name, stack.morph.scheme)
+  EVERY_NAME("--values", LSM_VALUES_COUNT, lsm_values_name, values)
   static const char *const backends[] = {LSM_BACKEND_TABLE(LSM_BACKEND_NAME) "auto"};
   for (size_t k = 0; k < sizeof backends / sizeof *backends; ++k) {
-    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--backend", (char *)backends[k]};
-    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
+    parse_option(&cli, "--backend", backends[k]);
     assert_string_equal(cli.backend, backends[k]);
-  }
-  for (int k = 0; k < LSM_VALUES_COUNT; ++k) {
-    char *argv[] = {"lsmorph", "reconstruct", "in", "-o", "out",
-                    "--values", (char *)lsm_values_name((lsm_values)k)};
-    assert_int_equal(parse(&cli, &err, 7, argv), LSM_OK);
-    assert_int_equal(cli.values, k);
   }
   char *rk3[] = {"lsmorph", "reconstruct", "in", "-o", "out", "--time", "rk3"};
   assert_int_equal(parse(&cli, &err, 7, rk3), LSM_OK);

@@ -324,6 +324,20 @@ cp -r r4 r4-uncounted && printf '{"input": {"folder": "tall4"}, "slices": 3}\n' 
 expect "score: a run.json without the input count" 1 \
   "r4-uncounted/run.json: does not say how many input slices the result was made from" - \
   score tall r4-uncounted --stride 4
+# run.json's counts are checked against the truth before they size anything: an
+# input count of 10^12 is refused at once (it once allocated 8 TB), and so are
+# more input heights than truth slices
+cp -r r4 r4-huge && sed 's/"slices": 3,/"slices": 1000000000000,/' r4/run.json >r4-huge/run.json
+expect "score: run.json's input count far above the truth's" 1 \
+  "r4-huge: was made from 1000000000000 slices (run.json), more than the 9 truth slices" - \
+  score tall r4-huge --stride 2
+cp -r r4 r4-heights && /usr/bin/python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["input"]["heights"] = [float(k) for k in range(12)]
+json.dump(d, open(sys.argv[1], "w"))' r4-heights/run.json
+expect "score: more input heights than truth slices" 1 \
+  "r4-heights/run.json: gives 12 input heights, more than the 9 truth slices: the result was not made from slices of tall" - score tall r4-heights
 # run.json is read as JSON: saved again by another tool (indented, members
 # reordered, the input count last) it still tells the stride
 cp -r r4 r4-resaved && /usr/bin/python3 -c '
@@ -464,7 +478,9 @@ else # root may write anywhere; /proc takes no new folders even from root
 fi
 sum=$(fingerprint good)
 expect "OUT is the input folder" 1 "good: is or contains the input folder" - reconstruct good -o good -q
-expect "OUT contains the input folder" 1 "is or contains the input folder good" - reconstruct good -o . -q
+mkdir -p holder && cp -r good holder/in
+expect "OUT contains the input folder" 1 "holder: is or contains the input folder holder/in" - \
+  reconstruct holder/in -o holder -q
 if [ "$(fingerprint good)" = "$sum" ]; then ok; else bad "the input folder was changed"; fi
 # a folder that is not an earlier result is never replaced: nor one holding the heights file
 mkdir -p mine && echo precious >mine/notes.txt && printf '0\n1\n2\n' >mine/z.txt

@@ -61,12 +61,13 @@ static lsm_status result_input_count(const char *text, const char *path, size_t 
   return LSM_OK;
 }
 
-/* Where a result's input slices lie among the truth slices (0-based), from
- * its run.json: the input heights (input.heights) are whole output steps
- * (options.dz) apart, the first input being truth slice first.  *pos is
- * allocated, *n_pos entries. */
+/* Where a result's input slices lie among the n_truth truth slices
+ * of truth_dir (0-based), from its run.json: the input heights (input.heights) are whole
+ * output steps (options.dz) apart, the first input being truth slice first.
+ * *pos is allocated, *n_pos entries: no more than the truth has slices. */
 static lsm_status result_input_positions(const char *text, const char *path, size_t first,
-                                         size_t **pos, size_t *n_pos, lsm_err *err) {
+                                         size_t n_truth, const char *truth_dir, size_t **pos, size_t *n_pos,
+                                         lsm_err *err) {
   static const char *const heights_key[] = {"input", "heights"}, *const dz_key[] = {"options", "dz"};
   size_t n = 0;
   double dz = 0.0;
@@ -75,6 +76,10 @@ static lsm_status result_input_positions(const char *text, const char *path, siz
   if (lsm_json_find_numbers(text, heights_key, 2, NULL, 0, &n, NULL) != 1 || n == 0)
     return lsm_fail(err, LSM_ERR_INPUT, path,
                     "does not give the input heights (input.heights): give --stride K");
+  if (n > n_truth)
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "gives %zu input heights, more than the %zu truth slices: the result was "
+                    "not made from slices of %s", n, n_truth, truth_dir);
   if (lsm_json_find_number(text, dz_key, 2, &dz, NULL) != 1 || !(dz > 0.0) || !isfinite(dz))
     return lsm_fail(err, LSM_ERR_INPUT, path,
                     "does not give the output step (options.dz): give --stride K");
@@ -186,12 +191,17 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
                       : "");
   } else if (k && text) {
     st = result_input_count(text, path, inputs, err);
+    /* checked against the truth before the count sizes anything */
+    if (st == LSM_OK && *inputs > n_truth)
+      st = lsm_fail(err, LSM_ERR_INPUT, cli->result_dir,
+                    "was made from %zu slices (run.json), more than the %zu truth slices: the "
+                    "result was not made from slices of %s", *inputs, n_truth, cli->truth_dir);
     if (st == LSM_OK) offsets = lsm_alloc(*inputs, sizeof *offsets, err, "slice list");
     if (st == LSM_OK && !offsets) st = err ? err->status : LSM_ERR_NOMEM;
     for (size_t i = 0; st == LSM_OK && i < *inputs; ++i) offsets[i] = i * k;
     n_offsets = *inputs;
   } else if (!k) {
-    st = result_input_positions(text, path, 0, &offsets, &n_offsets, err);
+    st = result_input_positions(text, path, 0, n_truth, cli->truth_dir, &offsets, &n_offsets, err);
   }
   int named = 0;
   if (st == LSM_OK && cli->first == 0 && text)
