@@ -70,6 +70,7 @@ typedef struct json_reader {
   double value;
   int want_array;   /* seeking an array (of numbers, or of strings), not one number */
   int want_strings; /* ... of strings */
+  int want_string;  /* one string, not one number: its bytes in spans[0], span_lengths[0] */
   double *items;    /* its numbers (up to capacity), counted in n_items */
   const char **spans; /* or its strings: bytes between the quotes, escapes unresolved */
   size_t *span_lengths;
@@ -185,7 +186,13 @@ static int json_read_value(json_reader *r, int level, int on_path) {
       if (match && level + 1 == r->count) {
         if (r->want_array) /* the member's value was read: found if the array sought */
           r->found = *value == '[' && r->found == 2;
-        else if (number) {
+        else if (r->want_string) {
+          r->found = *value == '"';
+          if (r->found) {
+            r->spans[0] = value + 1;
+            r->span_lengths[0] = (size_t)(r->p - value) - 2;
+          }
+        } else if (number) {
           r->found = 1; /* the number sought, read by the grammar above */
           r->value = strtod(value, NULL);
         }
@@ -262,6 +269,18 @@ int lsm_json_find_strings(const char *text, const char *const *keys, int count, 
   *n = 0;
   if (!json_read_document(&r, text, error_at)) return -1;
   if (r.found) *n = r.n_items;
+  return r.found;
+}
+
+int lsm_json_find_string(const char *text, const char *const *keys, int count, const char **raw,
+                         size_t *raw_length, size_t *error_at) {
+  const char *span = NULL;
+  size_t length = 0;
+  json_reader r = {.p = text, .keys = keys, .count = count, .want_string = 1, .spans = &span,
+                   .span_lengths = &length};
+  if (!json_read_document(&r, text, error_at)) return -1;
+  if (r.found && raw) *raw = span;
+  if (r.found && raw_length) *raw_length = length;
   return r.found;
 }
 

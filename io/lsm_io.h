@@ -351,6 +351,12 @@ int lsm_json_find_numbers(const char *text, const char *const *keys, int count, 
 int lsm_json_find_strings(const char *text, const char *const *keys, int count, const char **raw,
                           size_t *raw_lengths, size_t capacity, size_t *n, size_t *error_at);
 
+/* The same for one string (run.json's lsmorph_version): *raw points into
+ * text at the bytes between its quotes, *raw_length bytes, escapes
+ * unresolved; either may be NULL. */
+int lsm_json_find_string(const char *text, const char *const *keys, int count, const char **raw,
+                         size_t *raw_length, size_t *error_at);
+
 /* Resolves the escapes of a JSON string's raw bytes (length of them) into
  * out, which must hold length + 1 bytes (nothing grows); NUL-terminated.  As
  * lsm_json_string writes file names, \u0001 to \u00ff are the bytes of those

@@ -798,12 +798,11 @@ static void test_pinhole(void **state) {
  * morph) sank below zero unevenly and left holes of one or two pixels on
  * the neck (6 in all, at z = 27, 36 and 37); no section has a hole and
  * neither has the truth.  Every output slice must be free of holes. */
-static void test_merge_no_pinholes(void **state) {
-  (void)state;
-  enum { N = 8, SIDE = 128 };
-  slice_def defs[N];
-  double z[N];
-  for (int k = 0; k < N; ++k) {
+enum { BALLS_N = 8, BALLS_SIDE = 128 };
+
+/* The sections of those two balls, every 8th unit from z = 0. */
+static void merging_balls(slice_def defs[BALLS_N], double z[BALLS_N]) {
+  for (int k = 0; k < BALLS_N; ++k) {
     z[k] = 8.0 * k;
     defs[k].n = 0;
     const double r1 = 400.0 - (z[k] - 26.0) * (z[k] - 26.0);
@@ -811,6 +810,14 @@ static void test_merge_no_pinholes(void **state) {
     if (r1 > 0.0) defs[k].s[defs[k].n++] = disc(46.0, 63.5, sqrt(r1));
     if (r2 > 0.0) defs[k].s[defs[k].n++] = disc(82.0, 63.5, sqrt(r2));
   }
+}
+
+static void test_merge_no_pinholes(void **state) {
+  (void)state;
+  enum { N = BALLS_N, SIDE = BALLS_SIDE };
+  slice_def defs[N];
+  double z[N];
+  merging_balls(defs, z);
   for (int m = 0; m < 2; ++m) {
     lsm_stack_opts o;
     default_opts(&o);
@@ -1185,17 +1192,10 @@ static void test_rules_off(void **state) {
   assert_true(lagging > 0);
   sink_free(&r.sink);
   /* pinhole-fill: two balls merging (test_merge_no_pinholes) keep holes */
-  enum { N = 8, SIDE = 128 };
+  enum { N = BALLS_N, SIDE = BALLS_SIDE };
   slice_def balls[N];
   double z[N];
-  for (int k = 0; k < N; ++k) {
-    z[k] = 8.0 * k;
-    balls[k].n = 0;
-    const double r1 = 400.0 - (z[k] - 26.0) * (z[k] - 26.0);
-    const double r2 = 400.0 - (z[k] - 40.0) * (z[k] - 40.0);
-    if (r1 > 0.0) balls[k].s[balls[k].n++] = disc(46.0, 63.5, sqrt(r1));
-    if (r2 > 0.0) balls[k].s[balls[k].n++] = disc(82.0, 63.5, sqrt(r2));
-  }
+  merging_balls(balls, z);
   default_opts(&o);
   switch_off(&o, "pinhole-fill");
   assert_int_equal(run_stack(&r, SIDE, SIDE, 0, balls, z, N, &o), LSM_OK);

@@ -27,6 +27,14 @@ size_t lsm_output_file_names(const lsm_cli *cli, const char **names, size_t cap)
   return n;
 }
 
+size_t lsm_output_known_names(const char **names, size_t cap) {
+  lsm_cli all;
+  memset(&all, 0, sizeof all);
+  all.formats = LSM_FORMAT_ALL;
+  all.write_slices = all.mesh = all.preview = 1;
+  return lsm_output_file_names(&all, names, cap);
+}
+
 double lsm_outputs_mean_step(const lsm_outputs *o) {
   return o->count > 1 ? (o->z_last - o->z_first) / (double)(o->count - 1) : 0.0;
 }

@@ -61,4 +61,8 @@ int lsm_outputs_evenly_spaced(const lsm_outputs *o);
  * order they are listed; returns how many, storing at most cap. */
 size_t lsm_output_file_names(const lsm_cli *cli, const char **names, size_t cap);
 
+/* Every name reconstruct writes to OUT_DIR with some options (every format,
+ * slices, mesh, previews). */
+size_t lsm_output_known_names(const char **names, size_t cap);
+
 #endif

@@ -122,7 +122,8 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
  * heights z (malloc'd), OUT_DIR, the slice size and the foreground rule; then
  * the notes on inputs and options. */
 static lsm_status read_inputs(const lsm_cli *cli, lsm_slice_files *src, double **z, int *width,
-                              int *height, lsm_err *err) {
+                              int *height, lsm_out_dir *out_dir, const char *const *names,
+                              size_t n_names, lsm_err *err) {
   size_t others = 0;
   LSM_TRY(lsm_dir_list_slices(cli->slice_dir, &src->paths, &src->count, &others, err));
   if (others && !cli->quiet)
@@ -135,7 +136,8 @@ static lsm_status read_inputs(const lsm_cli *cli, lsm_slice_files *src, double *
     return lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir,
                     "only one slice: need at least two to fill a gap");
   LSM_TRY(lsm_input_heights(cli, src->paths, src->count, z, err));
-  LSM_TRY(lsm_out_dir_check(cli->out_dir, cli->slice_dir, cli->heights_file, err));
+  LSM_TRY(lsm_out_dir_check(out_dir, cli->out_dir, names, n_names, cli->slice_dir,
+                            cli->heights_file, cli->quiet ? NULL : stderr, err));
   LSM_TRY(lsm_check_inputs(cli, src, *z, width, height, err));
   LSM_TRY(lsm_pick_foreground(src->paths, src->count, &src->read, cli->quiet, cli->slice_dir,
                               err));
@@ -216,7 +218,12 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   memset(&out, 0, sizeof out);
   lsm_out_dir out_dir;
   memset(&out_dir, 0, sizeof out_dir);
-  lsm_status st = read_inputs(cli, &src, &z, &width, &height, err);
+  lsm_signal_guard guard; /* a second Ctrl-C removes the temporary folder */
+  memset(&guard, 0, sizeof guard);
+  const char *names[16];
+  const size_t n_names = lsm_output_file_names(cli, names, 16);
+  lsm_status st = read_inputs(cli, &src, &z, &width, &height, &out_dir, names,
+                              n_names < 16 ? n_names : 16, err);
   if (st == LSM_OK && !cli->quiet) src.blank = calloc(src.count, 1); /* for a note; optional */
   lsm_stack_opts_resolve(&cli->stack); /* run.json records what the run uses */
   const int threads = setup_run(cli);
@@ -226,7 +233,8 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
     if (!stats) st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the run");
   }
   if (st == LSM_OK && !lsm_signals_caught()) lsm_signals_install(1);
-  if (st == LSM_OK) st = lsm_out_dir_begin(&out_dir, cli->out_dir, err);
+  if (st == LSM_OK) st = lsm_out_dir_begin(&out_dir, cli->quiet ? NULL : stderr, err);
+  if (st == LSM_OK) st = lsm_signals_guard_start(&guard, lsm_out_dir_abandon, &out_dir, err);
   if (st == LSM_OK) st = lsm_outputs_open(&out, cli, out_dir.tmp, width, height, z[0], err);
   /* the 3D preview is drawn as the slices come when their heights are known ahead */
   if (st == LSM_OK && out.preview && !cli->stack.per_iteration)
@@ -274,6 +282,8 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   if (st == LSM_OK && !cli->quiet) report_result(cli, &src, z, &out, stats, t_start);
   lsm_outputs_free(&out); /* before a failed run's folder is removed */
   if (st != LSM_OK) lsm_out_dir_discard(&out_dir, err);
+  lsm_signals_guard_stop(&guard);
+  lsm_out_dir_free(&out_dir);
   lsm_backend_close(&backend);
   free(stats);
   free(z);

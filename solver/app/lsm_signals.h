@@ -8,6 +8,7 @@
 #ifndef LSM_SIGNALS_H
 #define LSM_SIGNALS_H
 
+#include <pthread.h>
 #include <signal.h>
 
 #include "solver/base/lsm_status.h"
@@ -34,6 +35,25 @@ lsm_status lsm_signals_check(lsm_err *err);
 /* A sink that checks for a stop signal before handing each slice to *inner
  * (which must outlive it). */
 lsm_slice_sink lsm_signals_stoppable(lsm_slice_sink *inner);
+
+/* While a temporary result exists: a second stop signal (Ctrl-C pressed
+ * again while the first is still on its way to a check) calls cleanup(ctx)
+ * on the guard's own thread within 50 ms, then ends the process by the
+ * first signal.  Outside a guard a second signal ends the process at once.
+ * cleanup must be safe to call while the other threads run on. */
+typedef struct lsm_signal_guard {
+  pthread_t thread;
+  pthread_mutex_t lock;
+  pthread_cond_t wake;
+  int started, done;
+  void (*cleanup)(void *ctx);
+  void *ctx;
+} lsm_signal_guard;
+
+lsm_status lsm_signals_guard_start(lsm_signal_guard *g, void (*cleanup)(void *ctx), void *ctx,
+                                   lsm_err *err);
+/* Ends the guard (harmless when it did not start). */
+void lsm_signals_guard_stop(lsm_signal_guard *g);
 
 /* Ends the process by signal sig (its default action: exit status 128 + sig
  * in a shell), so that a calling script stops too; returns 128 + sig only if

@@ -4,7 +4,6 @@
 
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 struct lsm_morph {
   lsm_morph_opts opts;
@@ -20,18 +19,15 @@ struct lsm_morph {
 };
 
 void lsm_morph_opts_default(lsm_morph_opts *opts) {
-  memset(opts, 0, sizeof *opts);
-  opts->scheme = LSM_SCHEME_UPWIND;
-  opts->time = LSM_TIME_EULER;
-  opts->cfl = 0.75;
-  opts->reinit_every = 0;
-  opts->reinit_iters = 10;
-  opts->threads = 1;
-  opts->track_cp = 1;
-  opts->particles = 0;
+  /* the rest 0 / NULL: no reinitialisation, no particles, the C backend, no stop flag */
+  static const lsm_morph_opts defaults = {.scheme = LSM_SCHEME_UPWIND,
+                                          .time = LSM_TIME_EULER,
+                                          .cfl = 0.75,
+                                          .reinit_iters = 10,
+                                          .threads = 1,
+                                          .track_cp = 1};
+  *opts = defaults;
   lsm_pls_opts_default(&opts->pls);
-  opts->backend = NULL;
-  opts->stop = NULL;
 }
 
 void lsm_morph_destroy(lsm_morph **morph) {
