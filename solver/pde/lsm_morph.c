@@ -31,7 +31,7 @@ void lsm_morph_opts_default(lsm_morph_opts *opts) {
                                           .reinit_iters = 10,
                                           .threads = 1,
                                           .track_cp = 1,
-                                          .band = 0};
+                                          .band = 1};
   *opts = defaults;
   lsm_pls_opts_default(&opts->pls);
 }
