@@ -1153,6 +1153,19 @@ static void switch_off(lsm_stack_opts *o, const char *names) {
   assert_int_equal(lsm_rules_switch_off(&o->rules, names, &err), LSM_OK);
 }
 
+/* The first gap's statistics of a two-slice stack, with the rule `off`
+ * switched off (NULL: the defaults). */
+static lsm_pair_stats first_gap(const slice_def defs[2], const char *off) {
+  const double z2[2] = {0, 8};
+  lsm_stack_opts o;
+  default_opts(&o);
+  if (off) switch_off(&o, off);
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z2, 2, &o), LSM_OK);
+  sink_free(&r.sink);
+  return r.stats[0];
+}
+
 static void test_rules_off(void **state) {
   (void)state;
   const double z2[2] = {0, 8};
@@ -1161,24 +1174,12 @@ static void test_rules_off(void **state) {
   /* moving-parts: two discs moving apart */
   const slice_def apart[2] = {{2, {disc(40, C, 5), disc(60, C, 5)}},
                               {2, {disc(20, C, 5), disc(80, C, 5)}}};
-  default_opts(&o);
-  assert_int_equal(run_stack(&r, W, H, 0, apart, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].moving_parts, 2);
-  sink_free(&r.sink);
-  switch_off(&o, "moving-parts");
-  assert_int_equal(run_stack(&r, W, H, 0, apart, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].moving_parts, 0);
-  sink_free(&r.sink);
+  assert_int_equal(first_gap(apart, NULL).moving_parts, 2);
+  assert_int_equal(first_gap(apart, "moving-parts").moving_parts, 0);
   /* align-auto: a disc that moved by more than its width */
   const slice_def moved[2] = {{1, {disc(30, C, 10)}}, {1, {disc(70, C, 10)}}};
-  default_opts(&o);
-  assert_int_equal(run_stack(&r, W, H, 0, moved, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].aligned, 1);
-  sink_free(&r.sink);
-  switch_off(&o, "align-auto");
-  assert_int_equal(run_stack(&r, W, H, 0, moved, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].aligned, 0);
-  sink_free(&r.sink);
+  assert_int_equal(first_gap(moved, NULL).aligned, 1);
+  assert_int_equal(first_gap(moved, "align-auto").aligned, 0);
   /* border-extension: a band across the image lags at its border columns */
   const slice_def band[2] = {{1, {rect(0, 45, W - 1, 55, 0)}}, {1, {rect(0, 40, W - 1, 60, 0)}}};
   default_opts(&o);
