@@ -161,9 +161,12 @@ static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t ga
   const long long cap = pixels > 0 ? (1LL << 26) / pixels : workers;
   if (device && workers > cap) workers = cap > 1 ? cap : 1;
   /* a gap in flight also buffers its output slices until its turn to write
-   * them: at most 512 MiB of them in all (1024^2 slices with --dz 0.01 over
-   * gaps of 10 buffered 4 GB per gap); one worker writes as it goes */
-  const double buffered = (double)most_slices * (double)pixels * sizeof(float);
+   * them, and holds as many of its reverse morph's slices on its working
+   * canvas, (W + 4) x (H + 4) where the pair is not aligned (lsm_park): at
+   * most 512 MiB of them in all (1024^2 slices with --dz 0.01 over gaps of
+   * 10 buffered 4 GB per gap); one worker writes as it goes */
+  const double canvas = ((double)width + 4.0) * ((double)height + 4.0);
+  const double buffered = (double)most_slices * ((double)pixels + canvas) * sizeof(float);
   const long long fit = buffered > 0.0 ? (long long)((double)(1LL << 29) / buffered) : workers;
   if (workers > fit) workers = fit > 1 ? fit : 1;
   return (int)workers;
