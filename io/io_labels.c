@@ -14,6 +14,7 @@
 #include <zlib.h>
 
 #include "io/lsm_io.h"
+#include "io/lsm_temp.h"
 
 int lsm_labels_ends_with(const char *path, const char *suffix) {
   const size_t n = strlen(path), m = strlen(suffix);
@@ -95,6 +96,8 @@ void lsm_labels_free(lsm_label_file **f) {
 lsm_voxels *lsm_labels_voxels(lsm_label_file *f) { return &f->vox; }
 lsm_label_format lsm_labels_format(const lsm_label_file *f) { return f->format; }
 const char *lsm_labels_path(const lsm_label_file *f) { return f->path; }
+
+int lsm_labels_compressed(const lsm_label_file *f) { return f->compressed; }
 
 void lsm_labels_affine(const lsm_label_file *f, double m[3][4]) {
   memcpy(m, f->affine, sizeof f->affine);
@@ -253,15 +256,17 @@ lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err 
   return LSM_OK;
 }
 
-/* A temporary file beside final: "<dir>/.<name>.tmp-XXXXXX", with the
+/* A temporary file beside final: "<dir>/.<name>.tmp-TAG-XXXXXX" (io/lsm_temp.h), with the
  * permissions of a new file (mkstemp makes it private). */
 static lsm_status make_temp(const char *final, char *tmp, size_t cap, int *fd, lsm_err *err) {
   char dir[4096];
   LSM_TRY(folder_of(final, dir, sizeof dir, err));
   const char *slash = strrchr(final, '/');
   const char *name = slash ? slash + 1 : final;
-  const int n = snprintf(tmp, cap, "%s/.%s.tmp-XXXXXX", dir, name);
-  if (n < 0 || (size_t)n >= cap) return lsm_fail(err, LSM_ERR_INPUT, final, "the path is too long");
+  char stem[4400];
+  const int n = snprintf(stem, sizeof stem, "%s/.%s.tmp-", dir, name);
+  if (n < 0 || (size_t)n >= sizeof stem) return lsm_fail(err, LSM_ERR_INPUT, final, "the path is too long");
+  LSM_TRY(lsm_temp_template(tmp, cap, stem, err)); /* the name says who makes it */
   *fd = mkstemp(tmp);
   if (*fd < 0)
     return lsm_fail(err, LSM_ERR_IO, final, "cannot create a file beside it: %s", strerror(errno));

@@ -179,7 +179,8 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
   double solver = lsm_run_seconds() - t0;
   const size_t cells = (size_t)r->width * (size_t)r->height;
   lsm_park *park = NULL;
-  if (st == LSM_OK && reverse && k > 0) st = lsm_park_open(cells, (size_t)k, &park, err);
+  if (st == LSM_OK && reverse && k > 0)
+    st = lsm_park_open(cells, (size_t)k, r->opts->held_max, &park, err);
   if (st == LSM_OK && k > 0) st = lsm_morph_create(from, to, &r->morph, &m, err);
   for (int n = 1; st == LSM_OK && n <= k; ++n) {
     double t1 = lsm_run_seconds();

@@ -9,11 +9,16 @@ struct lsm_park {
   size_t cells, count;
 };
 
-lsm_status lsm_park_open(size_t cells, size_t slots, lsm_park **out, lsm_err *err) {
+lsm_status lsm_park_open(size_t cells, size_t slots, double max_bytes, lsm_park **out,
+                         lsm_err *err) {
   *out = NULL;
   size_t floats;
-  if (!lsm_size_mul(cells, slots ? slots : 1, &floats))
-    return lsm_fail(err, LSM_ERR_LIMIT, NULL, "%zu slices of %zu cells to hold overflow", slots, cells);
+  const double bytes = (double)cells * (double)slots * sizeof(float);
+  if (!lsm_size_mul(cells, slots ? slots : 1, &floats) || (max_bytes > 0.0 && bytes > max_bytes))
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL,
+                    "%zu slices of %zu cells wait for their turn in reverse order: %.3g GB, "
+                    "more than the %.3g GB of memory left for them (--max-memory)",
+                    slots, cells, bytes / 1e9, max_bytes / 1e9);
   lsm_park *p = lsm_alloc(1, sizeof *p, err, "held slices");
   if (!p) return err ? err->status : LSM_ERR_NOMEM;
   p->slots = lsm_alloc(floats, sizeof(float), err, "the reverse morph's slices held for their turn");

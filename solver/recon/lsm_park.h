@@ -18,9 +18,11 @@
 
 typedef struct lsm_park lsm_park;
 
-/* Opens a park of `slots` slots of `cells` floats; LSM_ERR_NOMEM (with the
- * size) when they cannot be held. */
-lsm_status lsm_park_open(size_t cells, size_t slots, lsm_park **out, lsm_err *err);
+/* Opens a park of `slots` slots of `cells` floats; LSM_ERR_LIMIT (with the
+ * numbers) past max_bytes (0: no limit), LSM_ERR_NOMEM when they cannot be
+ * allocated. */
+lsm_status lsm_park_open(size_t cells, size_t slots, double max_bytes, lsm_park **out,
+                         lsm_err *err);
 /* Writes v (cells floats) to slot `slot` (< slots). */
 lsm_status lsm_park_put(lsm_park *p, size_t slot, const float *v, lsm_err *err);
 /* Reads slot `slot` into v. */

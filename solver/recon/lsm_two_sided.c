@@ -64,7 +64,7 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
     st = err ? err->status : LSM_ERR_NOMEM;
   if (st == LSM_OK && both && lsm_rule_on(rules, LSM_RULE_PINHOLE_BLEND))
     st = lsm_pinholes_find(pa, pb, (float)rules->join_thin_px, &pinhole, err);
-  if (st == LSM_OK) st = lsm_park_open(cells, n, &park, err);
+  if (st == LSM_OK) st = lsm_park_open(cells, n, r->opts->held_max, &park, err);
   /* Reverse morph, latest output first; snapshot k goes to slot k.  Past
    * --max-iter no step polls the stop flag: each slot does. */
   for (size_t q = n; st == LSM_OK && q-- > 0;) {
