@@ -738,5 +738,8 @@ check "--rules-off: run.json lists them in table order" \
 rc=$?
 check "--rules-off with an unknown name exits 2 (got $rc)" [ $rc -eq 2 ]
 check "--rules-off names the unknown rule" grep -q "'no-such-rule' is not a rule" "$TMP/e"
+missing=$("$LSM" help rules | awk '/^constants/ { exit } /^[a-z][a-z-]*$/ { print }' |
+  while read -r rule; do grep -q "^| \`$rule\` |" solver/recon/README.md || printf '%s ' "$rule"; done)
+check "solver/recon/README.md lists every rule of 'help rules' (missing: $missing)" [ -z "$missing" ]
 
 finish

@@ -800,12 +800,11 @@ static void test_pinhole(void **state) {
  * morph) sank below zero unevenly and left holes of one or two pixels on
  * the neck (6 in all, at z = 27, 36 and 37); no section has a hole and
  * neither has the truth.  Every output slice must be free of holes. */
-static void test_merge_no_pinholes(void **state) {
-  (void)state;
-  enum { N = 8, SIDE = 128 };
-  slice_def defs[N];
-  double z[N];
-  for (int k = 0; k < N; ++k) {
+enum { BALLS_N = 8, BALLS_SIDE = 128 };
+
+/* The sections of those two balls, every 8th unit from z = 0. */
+static void merging_balls(slice_def defs[BALLS_N], double z[BALLS_N]) {
+  for (int k = 0; k < BALLS_N; ++k) {
     z[k] = 8.0 * k;
     defs[k].n = 0;
     const double r1 = 400.0 - (z[k] - 26.0) * (z[k] - 26.0);
@@ -813,6 +812,14 @@ static void test_merge_no_pinholes(void **state) {
     if (r1 > 0.0) defs[k].s[defs[k].n++] = disc(46.0, 63.5, sqrt(r1));
     if (r2 > 0.0) defs[k].s[defs[k].n++] = disc(82.0, 63.5, sqrt(r2));
   }
+}
+
+static void test_merge_no_pinholes(void **state) {
+  (void)state;
+  enum { N = BALLS_N, SIDE = BALLS_SIDE };
+  slice_def defs[N];
+  double z[N];
+  merging_balls(defs, z);
   for (int m = 0; m < 2; ++m) {
     lsm_stack_opts o;
     default_opts(&o);
@@ -1148,6 +1155,19 @@ static void switch_off(lsm_stack_opts *o, const char *names) {
   assert_int_equal(lsm_rules_switch_off(&o->rules, names, &err), LSM_OK);
 }
 
+/* The first gap's statistics of a two-slice stack, with the rule `off`
+ * switched off (NULL: the defaults). */
+static lsm_pair_stats first_gap(const slice_def defs[2], const char *off) {
+  const double z2[2] = {0, 8};
+  lsm_stack_opts o;
+  default_opts(&o);
+  if (off) switch_off(&o, off);
+  run r;
+  assert_int_equal(run_stack(&r, W, H, 0, defs, z2, 2, &o), LSM_OK);
+  sink_free(&r.sink);
+  return r.stats[0];
+}
+
 static void test_rules_off(void **state) {
   (void)state;
   const double z2[2] = {0, 8};
@@ -1156,24 +1176,12 @@ static void test_rules_off(void **state) {
   /* moving-parts: two discs moving apart */
   const slice_def apart[2] = {{2, {disc(40, C, 5), disc(60, C, 5)}},
                               {2, {disc(20, C, 5), disc(80, C, 5)}}};
-  default_opts(&o);
-  assert_int_equal(run_stack(&r, W, H, 0, apart, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].moving_parts, 2);
-  sink_free(&r.sink);
-  switch_off(&o, "moving-parts");
-  assert_int_equal(run_stack(&r, W, H, 0, apart, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].moving_parts, 0);
-  sink_free(&r.sink);
+  assert_int_equal(first_gap(apart, NULL).moving_parts, 2);
+  assert_int_equal(first_gap(apart, "moving-parts").moving_parts, 0);
   /* align-auto: a disc that moved by more than its width */
   const slice_def moved[2] = {{1, {disc(30, C, 10)}}, {1, {disc(70, C, 10)}}};
-  default_opts(&o);
-  assert_int_equal(run_stack(&r, W, H, 0, moved, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].aligned, 1);
-  sink_free(&r.sink);
-  switch_off(&o, "align-auto");
-  assert_int_equal(run_stack(&r, W, H, 0, moved, z2, 2, &o), LSM_OK);
-  assert_int_equal(r.stats[0].aligned, 0);
-  sink_free(&r.sink);
+  assert_int_equal(first_gap(moved, NULL).aligned, 1);
+  assert_int_equal(first_gap(moved, "align-auto").aligned, 0);
   /* border-extension: a band across the image lags at its border columns */
   const slice_def band[2] = {{1, {rect(0, 45, W - 1, 55, 0)}}, {1, {rect(0, 40, W - 1, 60, 0)}}};
   default_opts(&o);
@@ -1187,17 +1195,10 @@ static void test_rules_off(void **state) {
   assert_true(lagging > 0);
   sink_free(&r.sink);
   /* pinhole-fill: two balls merging (test_merge_no_pinholes) keep holes */
-  enum { N = 8, SIDE = 128 };
+  enum { N = BALLS_N, SIDE = BALLS_SIDE };
   slice_def balls[N];
   double z[N];
-  for (int k = 0; k < N; ++k) {
-    z[k] = 8.0 * k;
-    balls[k].n = 0;
-    const double r1 = 400.0 - (z[k] - 26.0) * (z[k] - 26.0);
-    const double r2 = 400.0 - (z[k] - 40.0) * (z[k] - 40.0);
-    if (r1 > 0.0) balls[k].s[balls[k].n++] = disc(46.0, 63.5, sqrt(r1));
-    if (r2 > 0.0) balls[k].s[balls[k].n++] = disc(82.0, 63.5, sqrt(r2));
-  }
+  merging_balls(balls, z);
   default_opts(&o);
   switch_off(&o, "pinhole-fill");
   assert_int_equal(run_stack(&r, SIDE, SIDE, 0, balls, z, N, &o), LSM_OK);

@@ -4,7 +4,7 @@
 #   sh validation/run.sh BUILD_DIR [STUDY ...]
 #
 # BUILD_DIR holds lsmorph, examples/gen_synthetic and validation/* (make
-# validate builds them first).  STUDY is a number 1..5; without any, all five
+# validate builds them first).  STUDY is a number 1..6; without any, all six
 # run and the report folder is started afresh.  With some, only those run and
 # the sections of earlier runs of the others are kept in the report.
 # Exits non-zero, with the failing step's message, when any step fails.
@@ -12,7 +12,7 @@ set -eu
 
 BUILD=${1:-build}
 [ $# -gt 0 ] && shift
-STUDIES=${*:-1 2 3 4 5}
+STUDIES=${*:-1 2 3 4 5 6}
 PY=/usr/bin/python3
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(dirname "$HERE")
@@ -73,7 +73,8 @@ for s in $STUDIES; do
     3) script=study3_solids.py ;;
     4) script=study4_synthetic.py ;;
     5) script=study5_bunny.py ;;
-    *) fail "unknown study '$s' (use 1..5)" ;;
+    6) script=study6_ablation.py ;;
+    *) fail "unknown study '$s' (use 1..6)" ;;
   esac
   echo "validate: study $s ($script)" >&2
   "$PY" "$HERE/$script" "$SNAP" "$REPORT" || fail "study $s ($script)"

@@ -173,7 +173,7 @@ def main():
          "(`pairs[].slices`, `pairs[].seconds`; the per-iteration mode runs each pair twice, "
          "once to count the iterations and once to emit them, and both are in the time). "
          "The document's columns are **the document's numbers** (LS and PLS columns of the "
-         "table in solver/README.md, read from `%s`), measured with MATLAB R2011b on an Intel "
+         "design document's table, read from `%s`), measured with MATLAB R2011b on an Intel "
          "Core i7 1.73 GHz laptop. Ours: %s, %s thread(s), on a machine shared with other "
          "jobs (load average in the header)." % (
              opts.get("tol", "?"), vlib.describe_options(opts), doc_path, cpu, opts.get("threads", "?")))

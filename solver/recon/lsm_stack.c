@@ -19,18 +19,10 @@ LSM_NAME_FUNCTIONS(lsm_interp, LSM_INTERP_LIST, lsm_interp_name, lsm_interp_from
 LSM_NAME_FUNCTIONS(lsm_end_rule, LSM_ENDS_LIST, lsm_end_rule_name, lsm_end_rule_from_name)
 
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
-  memset(opts, 0, sizeof *opts);
-  opts->method = LSM_METHOD_LS;
-  opts->input = LSM_INPUT_MASK;
-  opts->align = LSM_ALIGN_AUTO;
-  opts->interp = LSM_INTERP_CUBIC;
-  opts->ends = LSM_ENDS_AUTO;
-  opts->pixel_dx = 1.0;
-  opts->pixel_dy = 1.0;
-  opts->dz = 0.0;
-  opts->per_iteration = 0;
-  opts->tol = 0.25;
-  opts->max_iter = 100000;
+  *opts = (lsm_stack_opts){.method = LSM_METHOD_LS, .input = LSM_INPUT_MASK,
+                           .align = LSM_ALIGN_AUTO, .interp = LSM_INTERP_CUBIC,
+                           .ends = LSM_ENDS_AUTO, .pixel_dx = 1.0, .pixel_dy = 1.0,
+                           .dz = 0.0 /* the pixel size */, .tol = 0.25, .max_iter = 100000};
   lsm_morph_opts_default(&opts->morph);
   lsm_rules_default(&opts->rules);
 }
@@ -107,15 +99,8 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
   lsm_stack_opts_resolve(&used);
   opts = &used;
 
-  lsm_run r;
-  memset(&r, 0, sizeof r);
-  r.src = src;
-  r.opts = opts;
-  r.sink = sink;
-  r.progress = progress;
-  r.width = width;
-  r.height = height;
-  r.morph = opts->morph;
+  lsm_run r = {.src = src, .opts = opts, .sink = sink, .progress = progress, .width = width,
+               .height = height, .morph = opts->morph};
   r.morph.track_cp = opts->per_iteration; /* default mode: CP of each snapshot's last step */
   r.morph.particles = opts->method == LSM_METHOD_PLS;
   r.out = lsm_alloc((size_t)width * (size_t)height, sizeof(float), err, "output slice");

@@ -13,6 +13,7 @@
  *   lsm_zprofile   the monotone cubic z-profile through the four nearest slices
  *   lsm_emit       to the sink: pinholes filled (lsm_pinholes), zero ties broken
  *   lsm_schedule   gaps as tasks on threads or MPI ranks, output in stack order
+ *   lsm_rules      every reconstruction rule and constant (opts.rules; --rules-off)
  *
  * Output heights (default mode): the regular grid z0, z0 + dz, ... up to the
  * last input height.  An output height on an input height gets that input
