@@ -17,10 +17,7 @@ SUITE=limits
 . "$(dirname "$0")/harness.sh"
 need "$LSM"
 command -v "$PY" >/dev/null 2>&1 || PY=python3
-make_tmp
-cd "$TMP" || exit 1
-case $LSM in /*) ;; *) LSM="$OLDPWD/$LSM" ;; esac
-TESTS=$OLDPWD/tests
+work_in_tmp
 
 # ---- scratch: nothing outside the output's temporary folder --------------------------------
 # 40 slices of 512x512, every gap two-sided (the reverse morph's snapshots
