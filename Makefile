@@ -48,6 +48,9 @@ CFLAGS  ?=
 CFLAGS  += -std=c17 $(WARN) $(OPT) -fopenmp -D_POSIX_C_SOURCE=200809L -I. -MMD -MP
 # nifticlib's headers include each other by bare name from /usr/include/nifti
 CFLAGS  += -I/usr/include/nifti
+# every library object also goes into liblsmorph.so, which exports lsmorph.h's
+# functions only; not for tests (test_tiff_changing interposes libc's read())
+OBJ_CFLAGS := -fPIC -fvisibility=hidden
 ifeq ($(MPI),1)
 CFLAGS  += -DLSM_WITH_MPI
 endif
@@ -83,7 +86,7 @@ FUZZ_OBJ := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(LIB_SRC))
 FUZZ_BIN := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
 
 .PHONY: all deps demo test bench validate install clean fuzz fuzz-build
-all: $(BUILD)/lsmorph $(EXAMPLE_BIN)
+all: $(BUILD)/lsmorph $(EXAMPLE_BIN) $(BUILD)/liblsmorph.so $(BUILD)/python/lsmorph/__init__.py
 
 # Install missing Debian packages once per build folder (apt-get; sudo when not root).
 deps: $(DEPS_STAMP)
@@ -91,9 +94,14 @@ $(DEPS_STAMP):
 	@sh tests/install-deps.sh $(DEBIAN_PACKAGES)
 	@mkdir -p $(BUILD) && touch $@
 
-$(BUILD)/obj/%.o: %.c | $(DEPS_STAMP)
+# Objects are rebuilt when the compiler or its flags change (-fPIC came in with
+# liblsmorph.so): a stamp holds them and is rewritten only when they differ.
+FLAGS_STAMP := $(BUILD)/.cflags
+$(shell mkdir -p $(BUILD) && echo '$(CC) $(CFLAGS) $(OBJ_CFLAGS)' | cmp -s - $(FLAGS_STAMP) || \
+  echo '$(CC) $(CFLAGS) $(OBJ_CFLAGS)' > $(FLAGS_STAMP))
+$(BUILD)/obj/%.o: %.c $(FLAGS_STAMP) | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) -c $< -o $@
+	$(CC) $(CFLAGS) $(OBJ_CFLAGS) -c $< -o $@
 
 # OpenCL kernels embedded in the binary: kernels/morph.cl with kernels/lsm_cell.h,
 # kernels/lsm_stencil.h and kernels/lsm_particle_cell.h spliced in at its #includes
@@ -120,6 +128,19 @@ $(BUILD)/fuzz/obj/kernels/opencl/lsm_cl_context.o: FUZZ_CFLAGS += -I$(BUILD)/gen
 $(BUILD)/liblsmorph.a: $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
+
+# liblsmorph: the static archive above, and a shared library of the same objects
+# exporting lsmorph.h (solver/api); make install adds its pkg-config file for PREFIX.
+SONAME := liblsmorph.so.0
+$(BUILD)/liblsmorph.so: $(LIB_OBJ)
+	$(CC) $(CFLAGS) -shared -Wl,-soname,$(SONAME) $^ -o $@ $(LDLIBS)
+
+# The Python package over the shared library (ctypes): build/python/lsmorph is importable
+# (PYTHONPATH=build/python), with its own copy of liblsmorph.so.
+$(BUILD)/python/lsmorph/__init__.py: solver/api/python/lsmorph/__init__.py $(BUILD)/liblsmorph.so
+	@mkdir -p $(dir $@)
+	cp $(BUILD)/liblsmorph.so $(dir $@)liblsmorph.so
+	cp $< $@
 
 $(BUILD)/lsmorph: $(APP_OBJ) $(BUILD)/liblsmorph.a
 	$(CC) $(CFLAGS) $^ -o $@ $(LDLIBS)
@@ -180,9 +201,25 @@ validate: all $(VALIDATION_BIN)
 	@sh tests/install-deps.sh $(VALIDATE_PACKAGES)
 	@sh validation/run.sh $(BUILD)
 
+# The system Python 3's folder for packages under PREFIX, as Debian's python3 reads it
+# (/usr/local/lib/python3.X/dist-packages is on its path).
+PYTHON_SITE ?= $(shell /usr/bin/python3 -c "import sys; print('$(PREFIX)/lib/python%d.%d/dist-packages' % sys.version_info[:2])")
 install: all
-	install -d $(DESTDIR)$(PREFIX)/bin
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include
 	install -m 755 $(BUILD)/lsmorph $(DESTDIR)$(PREFIX)/bin/lsmorph
+	install -m 644 $(BUILD)/liblsmorph.a $(DESTDIR)$(PREFIX)/lib/liblsmorph.a
+	install -m 755 $(BUILD)/liblsmorph.so $(DESTDIR)$(PREFIX)/lib/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/liblsmorph.so
+	install -m 644 solver/api/lsmorph.h $(DESTDIR)$(PREFIX)/include/lsmorph.h
+	printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$${prefix}/lib' 'includedir=$${prefix}/include' '' \
+	  'Name: lsmorph' 'Description: fill the gaps between sparse slices by level-set metamorphosis' \
+	  'Version: $(shell sed -n "s/^#define LSMORPH_VERSION \"\(.*\)\"/\1/p" solver/api/lsmorph.h)' \
+	  'Libs: -L$${libdir} -llsmorph' 'Libs.private: $(LDLIBS)' 'Cflags: -I$${includedir}' \
+	  > $(DESTDIR)$(PREFIX)/lib/pkgconfig/lsmorph.pc
+	install -d $(DESTDIR)$(PYTHON_SITE)/lsmorph
+	install -m 644 solver/api/python/lsmorph/__init__.py $(DESTDIR)$(PYTHON_SITE)/lsmorph/__init__.py
+	printf 'LIBRARY = "%s"\n' '$(PREFIX)/lib/$(SONAME)' > $(DESTDIR)$(PYTHON_SITE)/lsmorph/_installed.py
+	-ldconfig 2>/dev/null
 
 clean:
 	rm -rf $(BUILD)

@@ -103,6 +103,18 @@ void lsm_labels_affine(const lsm_label_file *f, double m[3][4]) {
   memcpy(m, f->affine, sizeof f->affine);
 }
 
+lsm_status lsm_labels_sized(lsm_label_file *f, lsm_voxel_type type, uint64_t max_voxels,
+                            lsm_err *err) {
+  f->vox.type = type;
+  size_t count = 0;
+  LSM_TRY(lsm_voxels_count(f->vox.n, type, &count, f->path, err));
+  if (max_voxels && count > max_voxels)
+    return lsm_fail(err, LSM_ERR_LIMIT, f->path,
+                    "%zu x %zu x %zu = %zu voxels, more than --max-voxels %llu", f->vox.n[0],
+                    f->vox.n[1], f->vox.n[2], count, (unsigned long long)max_voxels);
+  return LSM_OK;
+}
+
 void lsm_labels_spacing_from_affine(lsm_label_file *f) {
   for (int a = 0; a < 3; ++a) {
     const double x = f->affine[0][a], y = f->affine[1][a], z = f->affine[2][a];
@@ -256,17 +268,21 @@ lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err 
   return LSM_OK;
 }
 
-/* A temporary file beside final: "<dir>/.<name>.tmp-TAG-XXXXXX" (io/lsm_temp.h), with the
- * permissions of a new file (mkstemp makes it private). */
+/* A temporary file beside final, "<dir>/.<name>.tmp-<tag>-XXXXXX" (lsm_temp.h),
+ * with the permissions of a new file (mkstemp makes it private); those of
+ * earlier runs that provably ended (killed while writing) are removed first. */
 static lsm_status make_temp(const char *final, char *tmp, size_t cap, int *fd, lsm_err *err) {
-  char dir[4096];
+  char dir[4096], prefix[300], stem[4400];
   LSM_TRY(folder_of(final, dir, sizeof dir, err));
   const char *slash = strrchr(final, '/');
   const char *name = slash ? slash + 1 : final;
-  char stem[4400];
-  const int n = snprintf(stem, sizeof stem, "%s/.%s.tmp-", dir, name);
-  if (n < 0 || (size_t)n >= sizeof stem) return lsm_fail(err, LSM_ERR_INPUT, final, "the path is too long");
-  LSM_TRY(lsm_temp_template(tmp, cap, stem, err)); /* the name says who makes it */
+  const int n = snprintf(prefix, sizeof prefix, ".%s.tmp-", name);
+  if (n < 0 || (size_t)n >= sizeof prefix)
+    return lsm_fail(err, LSM_ERR_INPUT, final, "the file name is too long");
+  snprintf(stem, sizeof stem, "%s/%s", dir, prefix);
+  lsm_temp_sweep_result swept;
+  lsm_temp_sweep(dir, prefix, NULL, &swept);
+  LSM_TRY(lsm_temp_template(tmp, cap, stem, err));
   *fd = mkstemp(tmp);
   if (*fd < 0)
     return lsm_fail(err, LSM_ERR_IO, final, "cannot create a file beside it: %s", strerror(errno));

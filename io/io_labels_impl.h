@@ -65,6 +65,11 @@ int lsm_nifti_labels_scaled(const lsm_label_file *f, double *slope, double *inte
 void lsm_nifti_labels_free(lsm_label_file *f);
 void lsm_nrrd_labels_free(lsm_label_file *f);
 
+/* Sets f->vox.type and checks n[0] x n[1] x n[2] voxels of it: no overflow,
+ * within max_voxels (0: no limit). */
+lsm_status lsm_labels_sized(lsm_label_file *f, lsm_voxel_type type, uint64_t max_voxels,
+                            lsm_err *err);
+
 /* Sets f->vox.spacing from the affine's column lengths. */
 void lsm_labels_spacing_from_affine(lsm_label_file *f);
 

@@ -145,13 +145,8 @@ lsm_status lsm_nifti_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err
                     "not a label map: its samples are %s (labels are integers, or floats "
                     "holding whole numbers)",
                     nifti_datatype_string(nim->datatype));
-  f->vox.type = type;
-  size_t count = 0;
-  LSM_TRY(lsm_voxels_count(f->vox.n, type, &count, f->path, err));
-  if (max_voxels && count > max_voxels)
-    return lsm_fail(err, LSM_ERR_LIMIT, f->path,
-                    "%zu x %zu x %zu = %zu voxels, more than --max-voxels %llu", f->vox.n[0],
-                    f->vox.n[1], f->vox.n[2], count, (unsigned long long)max_voxels);
+  LSM_TRY(lsm_labels_sized(f, type, max_voxels, err));
+  const size_t count = f->vox.n[0] * f->vox.n[1] * f->vox.n[2]; /* checked */
   /* an uncompressed file must hold its samples (a short one is damaged) */
   struct stat sb;
   const size_t bytes = count * lsm_voxel_size(type);

@@ -102,14 +102,7 @@ static lsm_status check_header(lsm_label_file *f, const Nrrd *nrrd, uint64_t max
                     airEnumStr(nrrdType, nrrd->type));
   const unsigned a0 = first_axis(nrrd);
   for (unsigned a = 0; a < 3; ++a) f->vox.n[a] = nrrd->axis[a0 + a].size;
-  f->vox.type = type;
-  size_t count = 0;
-  LSM_TRY(lsm_voxels_count(f->vox.n, type, &count, f->path, err));
-  if (max_voxels && count > max_voxels)
-    return lsm_fail(err, LSM_ERR_LIMIT, f->path,
-                    "%zu x %zu x %zu = %zu voxels, more than --max-voxels %llu", f->vox.n[0],
-                    f->vox.n[1], f->vox.n[2], count, (unsigned long long)max_voxels);
-  return LSM_OK;
+  return lsm_labels_sized(f, type, max_voxels, err);
 }
 
 /* Index to LPS world from the space directions and origin, else the

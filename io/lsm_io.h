@@ -66,6 +66,12 @@ lsm_status lsm_png_read_header(const char *path, uint64_t max_pixels, int *width
 void lsm_mask_row_from_samples(const uint8_t *row, uint32_t width, int channels, int depth,
                                int invert, int nonzero, uint8_t *out);
 
+/* The number of distinct non-zero values that fill regions of a PNG (a value
+ * with a pixel whose four neighbours hold it too), read as gray of the file's
+ * depth, counting up to 256 (io_levels.c).  For a note: a label map given
+ * where masks are read. */
+lsm_status lsm_png_count_levels(const char *path, unsigned *levels);
+
 /* Writes an 8-bit grayscale PNG; pixels are width*height bytes, row-major. */
 lsm_status lsm_png_write_gray8(const char *path, const uint8_t *pixels, int width,
                                int height, lsm_err *err);

@@ -1,7 +1,8 @@
 #!/bin/sh
 # make bench: speed of the upwind update against NumPy, Roe-Fix, threads,
-# peak memory of a reconstruction with 10 and 60 slices, and the share of the
-# previews and slice PNGs in a default run.
+# peak memory of a reconstruction with 10 and 60 slices, the share of the
+# previews and slice PNGs in a default run, and lsmorph fill on a
+# 512 x 512 x 200 label map against ITK's MorphologicalContourInterpolator.
 set -eu
 BUILD=${1:-build}
 PY=/usr/bin/python3
@@ -61,6 +62,8 @@ print("previews %.3f s, slice PNGs %.3f s; both: %.1f %% of the default run (tar
          "PASS" if share <= 0.10 else "FAIL"))
 PYEOF
 
+echo
+sh tests/bench_fill.sh "$BUILD"
 echo
 sh tests/bench_gaps.sh "$BUILD"
 echo

@@ -107,4 +107,26 @@ rc=$?
 check "every slice drawn: exit 0 (got $rc)" [ $rc -eq 0 ]
 check "every slice drawn: says nothing to fill" grep -q "nothing to fill" "$TMP/e"
 run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" same "$TMP" truth.nii.gz copy.nii.gz
+
+# ---- the PNG route's traps: reconstruct says where fill is the tool ---------------------------
+mkdir "$TMP/png"
+"$PY" -c "
+import numpy as np, zlib, struct
+def png(path, a):
+    raw = b''.join(b'\\x00' + bytes(r) for r in a)
+    chunk = lambda t, d: struct.pack('>I', len(d)) + t + d + struct.pack('>I', zlib.crc32(t + d) & 0xffffffff)
+    open(path, 'wb').write(b'\\x89PNG\\r\\n\\x1a\\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', a.shape[1], a.shape[0], 8, 0, 0, 0, 0))
+                          + chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
+for k in range(6):
+    a = np.zeros((30, 30), np.uint8)
+    if k in (0, 2, 3, 5):
+        a[5:25, 5:15] = 1
+        a[5:25, 15:25] = 2
+    png('$TMP/png/%02d.png' % k, a)
+"
+"$LSM" reconstruct "$TMP/png" -o "$TMP/png-out" --no-preview >"$TMP/o" 2>"$TMP/e"
+check "PNG labels 1 and 2: reconstruct says they were merged and points to fill" \
+  grep -q "00.png holds 2 distinct non-zero values: labels, read here as one object (merged).*lsmorph fill" "$TMP/e"
+check "blank slices between non-blank ones: reconstruct points to fill" \
+  grep -q "2 blank slices (01.png, ...) lie between slices that are not.*lsmorph fill LABELS -o OUT" "$TMP/e"
 finish

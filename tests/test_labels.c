@@ -7,12 +7,14 @@
 
 #include <dirent.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
 
 #include <nifti1.h>
 
 #include "io/lsm_labels.h"
+#include "io/lsm_temp.h"
 
 typedef struct tmp_fixture {
   char dir[64];
@@ -376,6 +378,48 @@ static void test_check_output(void **state) {
   assert_int_equal(lsm_labels_format_of("a.gz"), LSM_LABELS_UNKNOWN);
 }
 
+/* A temporary beside OUT left by a writer that was killed (its maker provably
+ * ended: lsm_temp.h) is removed by the next write; one whose maker lives, or
+ * of another machine, is left. */
+static void test_stale_temporaries(void **state) {
+  tmp_fixture *fx = *state;
+  char mine[LSM_TEMP_TAG_MAX], dead[LSM_TEMP_TAG_MAX] = "";
+  lsm_temp_tag(mine);
+  if (!mine[0]) skip(); /* no /proc: nothing is ever shown to have ended */
+  int fds[2];
+  assert_int_equal(pipe(fds), 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    lsm_temp_tag(mine);
+    _exit(write(fds[1], mine, sizeof mine) == (ssize_t)sizeof mine ? 0 : 1);
+  }
+  assert_true(child > 0);
+  assert_int_equal(read(fds[0], dead, sizeof dead), (ssize_t)sizeof dead);
+  close(fds[0]);
+  close(fds[1]);
+  waitpid(child, NULL, 0);
+  const char *other = "1.2.0123456789abcdef";
+  const char *tags[3] = {dead, mine, other};
+  char in[256], out[256], p[300];
+  for (int k = 0; k < 3; ++k) {
+    snprintf(p, sizeof p, "%s/.out.nrrd.tmp-%s-Ab3dE9", fx->dir, tags[k]);
+    write_nrrd(p, "x", NULL, 0);
+  }
+  path_in(fx, "in.nrrd", in);
+  path_in(fx, "out.nrrd", out);
+  write_nrrd(in, HEADER_4x3x2("ushort"), values_4x3x2, sizeof values_4x3x2);
+  lsm_label_file *f = NULL;
+  read_ok(in, &f);
+  lsm_err err;
+  lsm_err_clear(&err);
+  if (lsm_labels_write(f, out, &err) != LSM_OK) fail_msg("%s", err.msg);
+  lsm_labels_free(&f);
+  for (int k = 0; k < 3; ++k) {
+    snprintf(p, sizeof p, "%s/.out.nrrd.tmp-%s-Ab3dE9", fx->dir, tags[k]);
+    assert_int_equal(access(p, F_OK) == 0, k > 0);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_nrrd_round_trip, setup, teardown),
@@ -384,6 +428,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_hostile_nrrd, setup, teardown),
       cmocka_unit_test_setup_teardown(test_nifti, setup, teardown),
       cmocka_unit_test_setup_teardown(test_check_output, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_stale_temporaries, setup, teardown),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

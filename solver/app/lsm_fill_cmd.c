@@ -423,6 +423,7 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
   LSM_TRY(lsm_labels_check_output(out.path, a->labels_path, err));
   lsm_label_file *f = NULL;
   LSM_TRY(lsm_labels_read(a->labels_path, a->shared.max_voxels, &f, err));
+  const double t_read = omp_get_wtime();
   lsm_voxels *v = lsm_labels_voxels(f);
   const lsm_voxel_type was = v->type;
   int converted = 0;
@@ -496,8 +497,9 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
     st = lsm_backend_open(a->shared.backend, a->shared.device, o.threads, &backend, err);
     if (st == LSM_OK) {
       o.stack.morph.backend = backend;
-      if (!quiet && backend->fallback[0])
-        fprintf(stderr, "lsmorph: note: --backend auto runs on C: %s\n", backend->fallback);
+      if (!quiet && lsm_backend_fallback(backend)[0])
+        fprintf(stderr, "lsmorph: note: --backend auto runs on C: %s\n",
+                lsm_backend_fallback(backend));
     }
   }
   lsm_fill_stats stats;
@@ -507,15 +509,19 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
   if (st == LSM_OK && stop && *stop) st = lsm_fail(err, LSM_ERR_INTERRUPTED, NULL, "interrupted");
   lsm_signal_guard guard; /* a second Ctrl-C removes the temporary files */
   memset(&guard, 0, sizeof guard);
+  const double t_filled = omp_get_wtime();
   if (st == LSM_OK) st = lsm_signals_guard_start(&guard, lsm_out_file_abandon, &out, err);
   if (st == LSM_OK) st = lsm_labels_write(f, out.path, err);
   lsm_signals_guard_stop(&guard);
+  const double t_end = omp_get_wtime();
   if (st == LSM_OK && !quiet)
     fprintf(stderr,
             "lsmorph: filled %zu slices across %c (%zu voxels labelled), %zu label%s, %d "
-            "threads: wrote %s in %.2f s\n",
+            "threads: wrote %s in %.2f s (reading %.2f s, filling %.2f s of which %.2f s of "
+            "thread time in %lld morph steps, writing %.2f s)\n",
             plan->gap_slices, axis_names[plan->axis], stats.voxels_filled, stats.runs,
-            stats.runs == 1 ? "" : "s", stats.threads, a->out_path, omp_get_wtime() - t0);
+            stats.runs == 1 ? "" : "s", stats.threads, a->out_path, t_end - t0, t_read - t0,
+            t_filled - t_read, stats.solver_seconds, stats.iterations, t_end - t_filled);
   lsm_backend_close(&backend);
   lsm_fill_plan_free(&plan);
   free(slices);

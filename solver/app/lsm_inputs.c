@@ -29,6 +29,30 @@ static lsm_status note_dark_labels(const char *path, const lsm_image_read_opts *
   return LSM_OK;
 }
 
+/* A note when the first PNG slice with foreground holds several distinct
+ * non-zero values: a label map, whose labels read as one object. */
+static void note_merged_labels(char **paths, size_t count, const lsm_image_read_opts *ro) {
+  for (size_t k = 0; k < count; ++k) {
+    lsm_mask m = {0, 0, NULL};
+    lsm_err ignored;
+    lsm_err_clear(&ignored);
+    if (lsm_slice_read_mask(paths[k], ro, &m, &ignored) != LSM_OK) return;
+    const size_t inside = lsm_mask_count(&m);
+    lsm_mask_free(&m);
+    if (!inside) continue;
+    unsigned levels = 0;
+    if (lsm_is_tiff_name(paths[k]) || lsm_png_count_levels(paths[k], &levels) != LSM_OK ||
+        levels < 2)
+      return;
+    fprintf(stderr,
+            "lsmorph: note: %s holds %s%u distinct non-zero values: labels, read here as one "
+            "object (merged). A label map goes to lsmorph fill as a NIfTI or NRRD volume, "
+            "every label apart ('lsmorph help fill'); or write one mask per label\n",
+            paths[k], levels >= 256 ? "at least " : "", levels);
+    return;
+  }
+}
+
 /* Pass 0 looks for a pixel at 50 %, pass 1 for zero and non-zero pixels.  A
  * stack uniformly dark but not black (no zero pixel) stays empty. */
 lsm_status lsm_pick_foreground(char **paths, size_t count, lsm_image_read_opts *ro, int quiet,
@@ -60,6 +84,7 @@ lsm_status lsm_pick_foreground(char **paths, size_t count, lsm_image_read_opts *
             "lsmorph: note: %s: no pixel reaches 50 %% luminance in any slice; reading "
             "non-zero pixels as %s (label masks stored as 0/1)\n",
             dir, ro->invert ? "background" : "foreground");
+  if (!quiet) note_merged_labels(paths, count, ro);
   return LSM_OK;
 }
 
@@ -193,7 +218,42 @@ void lsm_inputs_note(const lsm_cli *cli, const lsm_slice_files *src) {
 static lsm_status slice_files_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
   lsm_slice_files *ps = ctx;
   LSM_TRY(lsm_signals_check(err));
-  return lsm_slice_read_mask(ps->paths[index], &ps->read, out, err);
+  LSM_TRY(lsm_slice_read_mask(ps->paths[index], &ps->read, out, err));
+  if (ps->blank) { /* gaps load their slices side by side */
+    uint8_t blank = lsm_mask_count(out) ? 2 : 1;
+#pragma omp atomic write
+    ps->blank[index] = blank;
+    (void)blank;
+  }
+  return LSM_OK;
+}
+
+void lsm_slice_files_free(lsm_slice_files *src) {
+  free(src->blank);
+  lsm_path_list_free(src->paths, src->count);
+  src->blank = NULL;
+  src->paths = NULL;
+  src->count = 0;
+}
+
+void lsm_inputs_note_blank(const lsm_slice_files *src, const char *dir) {
+  if (!src->blank) return;
+  size_t first = SIZE_MAX, last = 0, between = 0, example = 0;
+  for (size_t k = 0; k < src->count; ++k)
+    if (src->blank[k] == 2) {
+      if (first == SIZE_MAX) first = k;
+      last = k;
+    }
+  for (size_t k = first + 1; first != SIZE_MAX && k < last; ++k)
+    if (src->blank[k] == 1 && !between++) example = k;
+  if (between)
+    fprintf(stderr,
+            "lsmorph: note: %s: %zu blank slice%s (%s, ...) lie%s between slices that are not; "
+            "a blank slice says the object is absent there. If they are the undrawn slices of "
+            "a segmentation, fill the label volume itself: lsmorph fill LABELS -o OUT fills "
+            "the blank slices between drawn ones ('lsmorph help fill')\n",
+            dir, between, between == 1 ? "" : "s", lsm_base_name(src->paths[example]),
+            between == 1 ? "s" : "");
 }
 
 static const char *slice_files_name(void *ctx, size_t index) {

@@ -16,6 +16,7 @@ typedef struct lsm_slice_files {
   char **paths;
   size_t count;
   lsm_image_read_opts read;
+  uint8_t *blank; /* NULL, or per slice once loaded: 1 blank, 2 not (lsm_inputs_note_blank) */
 } lsm_slice_files;
 
 /* Foreground rule for a stack (ro->nonzero): luminance >= 50 %, unless no
@@ -36,6 +37,14 @@ lsm_status lsm_input_heights(const lsm_cli *cli, char *const *paths, size_t coun
  * outlines; file names numbered with gaps, or a heights.txt beside the
  * slices, when no option places the slices. */
 void lsm_inputs_note(const lsm_cli *cli, const lsm_slice_files *src);
+
+/* After a run: a note when blank slices lie between slices that are not (the
+ * undrawn slices of a label volume exported as PNGs read as drawn empty), which
+ * points to `lsmorph fill`. */
+void lsm_inputs_note_blank(const lsm_slice_files *src, const char *dir);
+
+/* Frees the paths and the blank flags. */
+void lsm_slice_files_free(lsm_slice_files *src);
 
 /* The files as the stack driver's source (it must outlive the run); each load
  * first checks for a stop signal. */

@@ -68,7 +68,7 @@ static lsm_status counted_send(void *ctx, size_t gap, const lsm_gap_result *resu
  * gap, which rank 0 waits for: rank 0 then reports it and ends the run. */
 static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *transport,
                                      lsm_err *err) {
-  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
+  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}, NULL};
   double *z = NULL;
   lsm_pair_stats *stats = NULL;
   lsm_backend *backend = NULL;
@@ -81,7 +81,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   if (st == LSM_OK && src.count < 2)
     st = lsm_fail(err, LSM_ERR_INPUT, cli->slice_dir, "need at least two PNG or TIFF slices");
   if (st == LSM_OK && (size_t)transport->rank >= src.count - 1) { /* no gap of its own */
-    lsm_path_list_free(src.paths, src.count);
+    lsm_slice_files_free(&src);
     return LSM_OK;
   }
   if (st == LSM_OK) st = lsm_input_heights(cli, src.paths, src.count, &z, err);
@@ -114,7 +114,7 @@ static lsm_status reconstruct_worker(lsm_cli *cli, const lsm_gap_transport *tran
   lsm_backend_close(&backend);
   free(stats);
   free(z);
-  lsm_path_list_free(src.paths, src.count);
+  lsm_slice_files_free(&src);
   return st;
 }
 
@@ -209,7 +209,7 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   if (lsm_mpi_rank(mpi) != 0) return reconstruct_worker(cli, lsm_mpi_transport(mpi), err);
   cli->stack.transport = lsm_mpi_transport(mpi);
   const double t_start = lsm_wall_seconds();
-  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}};
+  lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}, NULL};
   double *z = NULL;
   int width = 0, height = 0;
   lsm_pair_stats *stats = NULL;
@@ -224,6 +224,7 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   const size_t n_names = lsm_output_file_names(cli, names, 16);
   lsm_status st = read_inputs(cli, &src, &z, &width, &height, &out_dir, names,
                               n_names < 16 ? n_names : 16, err);
+  if (st == LSM_OK && !cli->quiet) src.blank = calloc(src.count, 1); /* for a note; optional */
   lsm_stack_opts_resolve(&cli->stack); /* run.json records what the run uses */
   const int threads = setup_run(cli);
   if (st == LSM_OK) st = open_backend(cli, threads, &backend, err);
@@ -282,6 +283,7 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   }
   if (st == LSM_OK) st = lsm_signals_check(err); /* a signal now still means no result */
   if (st == LSM_OK) st = lsm_out_dir_publish(&out_dir, err);
+  if (st == LSM_OK && !cli->quiet) lsm_inputs_note_blank(&src, cli->slice_dir);
   if (st == LSM_OK && !cli->quiet) report_result(cli, &src, z, &out, stats, t_start);
   lsm_outputs_free(&out); /* before a failed run's folder is removed */
   if (st != LSM_OK) lsm_out_dir_discard(&out_dir, err);
@@ -290,6 +292,6 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   lsm_backend_close(&backend);
   free(stats);
   free(z);
-  lsm_path_list_free(src.paths, src.count);
+  lsm_slice_files_free(&src);
   return st;
 }

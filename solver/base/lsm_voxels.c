@@ -34,19 +34,11 @@ lsm_status lsm_voxels_count(const size_t n[3], lsm_voxel_type type, size_t *coun
 }
 
 double lsm_voxel_get(const lsm_voxels *v, size_t index) {
-  const void *p = v->data;
   switch (v->type) {
-  case LSM_VOXEL_U8: return ((const uint8_t *)p)[index];
-  case LSM_VOXEL_I8: return ((const int8_t *)p)[index];
-  case LSM_VOXEL_U16: return ((const uint16_t *)p)[index];
-  case LSM_VOXEL_I16: return ((const int16_t *)p)[index];
-  case LSM_VOXEL_U32: return ((const uint32_t *)p)[index];
-  case LSM_VOXEL_I32: return ((const int32_t *)p)[index];
-  case LSM_VOXEL_U64: return (double)((const uint64_t *)p)[index];
-  case LSM_VOXEL_I64: return (double)((const int64_t *)p)[index];
-  case LSM_VOXEL_F32: return ((const float *)p)[index];
-  case LSM_VOXEL_F64: return ((const double *)p)[index];
-  default: return NAN;
+  case LSM_VOXEL_U64: return (double)((const uint64_t *)v->data)[index]; /* past INT64_MAX too */
+  case LSM_VOXEL_F32: return ((const float *)v->data)[index];
+  case LSM_VOXEL_F64: return ((const double *)v->data)[index];
+  default: return lsm_voxel_is_integer(v->type) ? (double)lsm_voxel_get_int(v, index) : NAN;
   }
 }
 

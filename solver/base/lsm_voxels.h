@@ -59,6 +59,28 @@ void lsm_voxel_set_int(lsm_voxels *v, size_t index, int64_t value);
 /* Whether an integer volume of this type holds value. */
 int lsm_voxel_type_holds(lsm_voxel_type type, int64_t value);
 
+/* Runs the statements that follow (__VA_ARGS__) with T the C type of the
+ * integer voxel type vtype (uint8_t ... int64_t): a loop over voxels compiled
+ * once per type, without a switch per voxel.  Nothing runs for other types. */
+#define LSM_VOXEL_INT_CASE(id, ctype, ...) \
+  case id: {                               \
+    typedef ctype T;                       \
+    __VA_ARGS__                            \
+  } break;
+#define LSM_VOXEL_INT_SWITCH(vtype, ...)                                        \
+  switch (vtype) {                                                              \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_U8, uint8_t, __VA_ARGS__)                      \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_I8, int8_t, __VA_ARGS__)                       \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_U16, uint16_t, __VA_ARGS__)                    \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_I16, int16_t, __VA_ARGS__)                     \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_U32, uint32_t, __VA_ARGS__)                    \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_I32, int32_t, __VA_ARGS__)                     \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_U64, uint64_t, __VA_ARGS__)                    \
+    LSM_VOXEL_INT_CASE(LSM_VOXEL_I64, int64_t, __VA_ARGS__)                     \
+  default:                                                                      \
+    break;                                                                      \
+  }
+
 /* The smallest integer type a label map of values in [lo, hi] fits,
  * preferring the types viewers expect of labels: uint8, int16, uint16,
  * int32, uint32, int64. */

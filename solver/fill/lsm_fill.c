@@ -40,6 +40,7 @@ typedef struct fill_shared {
   size_t done, total;
   int failed;             /* read and written atomically */
   const volatile sig_atomic_t *stop;
+  int whole_slices;
 } fill_shared;
 
 typedef struct label_task {
@@ -66,12 +67,15 @@ static void cut_mask(const label_task *t, size_t index, uint8_t *pixels) {
   const size_t s = sh->plan->drawn[t->lab->first + index];
   const size_t base = s * g->stride[g->axis];
   const int64_t value = t->lab->value;
-  for (int y = 0; y < t->height; ++y) {
-    const size_t row = base + (t->y0 + (size_t)y) * g->stride[g->v];
-    for (int x = 0; x < t->width; ++x)
-      pixels[(size_t)y * (size_t)t->width + (size_t)x] =
-          lsm_voxel_get_int(sh->vol, row + (t->x0 + (size_t)x) * g->stride[g->u]) == value;
-  }
+  const size_t su = g->stride[g->u];
+  LSM_VOXEL_INT_SWITCH(sh->vol->type, {
+    const T *p = (const T *)sh->vol->data;
+    for (int y = 0; y < t->height; ++y) {
+      const T *row = p + base + (t->y0 + (size_t)y) * g->stride[g->v] + t->x0 * su;
+      uint8_t *out = pixels + (size_t)y * (size_t)t->width;
+      for (int x = 0; x < t->width; ++x) out[x] = (int64_t)row[(size_t)x * su] == value;
+    }
+  })
 }
 
 static lsm_status task_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err) {
@@ -103,25 +107,27 @@ static lsm_status task_emit(void *ctx, const float *phi, int width, int height, 
   const double per = 1.0 / sh->quantum;
   omp_lock_t *lock = &sh->lock[gap % LOCK_STRIPES];
   omp_set_lock(lock);
-  for (int y = 0; y < height; ++y) {
-    const size_t py = t->y0 + (size_t)y;
-    for (int x = 0; x < width; ++x) {
-      const float f = phi[(size_t)y * (size_t)width + (size_t)x];
-      if (!(f < 0.0f)) continue;
-      const size_t px = t->x0 + (size_t)x, p = py * g->width + px;
-      const size_t voxel = base + px * g->stride[g->u] + py * g->stride[g->v];
-      const double deep = -(double)f * per;
-      const uint16_t q = (uint16_t)(1 + (deep >= 65534.0 ? 65534 : (unsigned)deep));
-      if (depth[p] == 0) {
-        if (lsm_voxel_get_int(sh->vol, voxel) != 0) continue; /* a label kept as it is */
-      } else if (q < depth[p] ||
-                 (q == depth[p] && value > lsm_voxel_get_int(sh->vol, voxel))) {
-        continue;
+  LSM_VOXEL_INT_SWITCH(sh->vol->type, {
+    T *vol = (T *)sh->vol->data;
+    for (int y = 0; y < height; ++y) {
+      const size_t py = t->y0 + (size_t)y;
+      for (int x = 0; x < width; ++x) {
+        const float f = phi[(size_t)y * (size_t)width + (size_t)x];
+        if (!(f < 0.0f)) continue;
+        const size_t px = t->x0 + (size_t)x, p = py * g->width + px;
+        const size_t voxel = base + px * g->stride[g->u] + py * g->stride[g->v];
+        const double deep = -(double)f * per;
+        const uint16_t q = (uint16_t)(1 + (deep >= 65534.0 ? 65534 : (unsigned)deep));
+        if (depth[p] == 0) {
+          if (vol[voxel] != 0) continue; /* a label kept as it is */
+        } else if (q < depth[p] || (q == depth[p] && value > (int64_t)vol[voxel])) {
+          continue;
+        }
+        depth[p] = q;
+        vol[voxel] = (T)value;
       }
-      depth[p] = q;
-      lsm_voxel_set_int(sh->vol, voxel, value);
     }
-  }
+  })
   omp_unset_lock(lock);
   if (sh->progress && sh->progress->update) {
     omp_set_lock(&sh->progress_lock);
@@ -170,11 +176,27 @@ static lsm_status task_box(label_task *t, lsm_err *err) {
     prev_at = k;
   }
   lsm_mask_free(&m);
+  if (sh->whole_slices) {
+    t->x0 = t->y0 = 0;
+    t->width = (int)g->width;
+    t->height = (int)g->height;
+    return LSM_OK;
+  }
   const size_t margin[2] = {2 + (size_t)ceil(step[0]), 2 + (size_t)ceil(step[1])};
-  const size_t x0 = t->x0 > margin[0] ? t->x0 - margin[0] : 0;
-  const size_t y0 = t->y0 > margin[1] ? t->y0 - margin[1] : 0;
-  const size_t x1 = lab->box[1] + margin[0] < g->width ? lab->box[1] + margin[0] : g->width - 1;
-  const size_t y1 = lab->box[3] + margin[1] < g->height ? lab->box[3] + margin[1] : g->height - 1;
+  size_t x0 = t->x0 > margin[0] ? t->x0 - margin[0] : 0;
+  size_t y0 = t->y0 > margin[1] ? t->y0 - margin[1] : 0;
+  size_t x1 = lab->box[1] + margin[0] < g->width ? lab->box[1] + margin[0] : g->width - 1;
+  size_t y1 = lab->box[3] + margin[1] < g->height ? lab->box[3] + margin[1] : g->height - 1;
+  /* sides of the slice's parity: an aligned pair is shifted by whole pixels
+   * from its centroid to the canvas centre, and the centres of a box and of
+   * the slice then lie alike on the pixel grid, so the box's pixels are moved
+   * as the slice's are */
+  if ((x1 - x0 + 1) % 2 != g->width % 2) {
+    if (x1 + 1 < g->width) ++x1; else --x0;
+  }
+  if ((y1 - y0 + 1) % 2 != g->height % 2) {
+    if (y1 + 1 < g->height) ++y1; else --y0;
+  }
   t->x0 = x0;
   t->y0 = y0;
   t->width = (int)(x1 - x0 + 1);
@@ -184,7 +206,7 @@ static lsm_status task_box(label_task *t, lsm_err *err) {
 
 /* One label's stack run, on `threads` threads. */
 static lsm_status run_task(label_task *t, const lsm_fill_opts *o, int threads, long long *iterations,
-                           lsm_err *err) {
+                           double *solver_seconds, lsm_err *err) {
   fill_shared *sh = t->sh;
   const fill_geometry *g = &sh->in->geo;
   LSM_TRY(task_box(t, err));
@@ -202,7 +224,10 @@ static lsm_status run_task(label_task *t, const lsm_fill_opts *o, int threads, l
   const lsm_slice_source source = {t, t->count, t->z, task_load, NULL};
   const lsm_slice_sink sink = {t, task_emit};
   const lsm_status st = lsm_stack_run(&source, t->width, t->height, &so, &sink, stats, NULL, err);
-  for (size_t k = 0; st == LSM_OK && k + 1 < t->count; ++k) *iterations += stats[k].iterations;
+  for (size_t k = 0; st == LSM_OK && k + 1 < t->count; ++k) {
+    *iterations += stats[k].iterations;
+    *solver_seconds += stats[k].seconds;
+  }
   free(stats);
   return st;
 }
@@ -251,6 +276,7 @@ lsm_status lsm_fill_run(const lsm_fill_plan *plan, lsm_voxels *v, const lsm_fill
   sh.quantum = fmin(v->spacing[g->u], v->spacing[g->v]) / 256.0;
   sh.progress = o->progress;
   sh.stop = o->stack.morph.stop;
+  sh.whole_slices = o->whole_slices;
   size_t cells = 0;
   if (!lsm_size_mul3(plan->gap_slices, g->width, g->height, &cells))
     return lsm_fail(err, LSM_ERR_LIMIT, NULL, "the gap slices' size overflows");
@@ -262,7 +288,9 @@ lsm_status lsm_fill_run(const lsm_fill_plan *plan, lsm_voxels *v, const lsm_fill
     return err ? err->status : LSM_ERR_NOMEM;
   }
   memset(sh.depth, 0, cells * sizeof *sh.depth);
-  clear_gaps(plan, v, threads);
+  /* found drawn slices are all the slices holding a label to fill: the gaps
+   * hold none; given ones (--slices) may leave labels in the gaps, replaced here */
+  if (o->slices) clear_gaps(plan, v, threads);
   /* one task per label with a drawn section, the costliest first */
   size_t tasks = 0;
   lsm_status st = LSM_OK;
@@ -295,16 +323,19 @@ lsm_status lsm_fill_run(const lsm_fill_plan *plan, lsm_voxels *v, const lsm_fill
   lsm_err first_err;
   lsm_err_clear(&first_err);
   long long iterations = 0;
+  double solver_seconds = 0.0;
   if (st == LSM_OK) {
 #pragma omp parallel for num_threads(side_by_side ? threads : 1) schedule(dynamic, 1) \
-    reduction(+ : iterations)
+    reduction(+ : iterations, solver_seconds)
     for (size_t k = 0; k < tasks; ++k) {
       if (failed(&sh)) continue;
       lsm_err e;
       lsm_err_clear(&e);
       long long its = 0;
-      const lsm_status ts = run_task(&task[k], o, side_by_side ? 1 : threads, &its, &e);
+      double secs = 0.0;
+      const lsm_status ts = run_task(&task[k], o, side_by_side ? 1 : threads, &its, &secs, &e);
       iterations += its;
+      solver_seconds += secs;
       if (ts != LSM_OK) {
 #pragma omp critical(lsm_fill_error)
         {
@@ -331,6 +362,7 @@ lsm_status lsm_fill_run(const lsm_fill_plan *plan, lsm_voxels *v, const lsm_fill
   if (st == LSM_OK) {
     stats->runs = tasks;
     stats->iterations = iterations;
+    stats->solver_seconds = solver_seconds;
     for (size_t k = 0; k < cells; ++k) stats->voxels_filled += sh.depth[k] != 0;
     for (size_t k = 0; k < tasks; ++k) {
       const size_t box = (size_t)task[k].width * (size_t)task[k].height;

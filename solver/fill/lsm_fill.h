@@ -59,6 +59,7 @@ typedef struct lsm_fill_opts {
   int ends_given;         /* stack.ends chosen by the caller; else halfway (lsm_fill.c) */
   int threads;            /* 0: all cores */
   const lsm_progress *progress; /* may be NULL; called from one thread at a time */
+  int whole_slices;       /* each label on whole slices, not its box (tests of the box) */
 } lsm_fill_opts;
 
 void lsm_fill_opts_default(lsm_fill_opts *o);
@@ -100,6 +101,7 @@ typedef struct lsm_fill_stats {
   size_t runs;            /* stack runs (labels with a drawn section) */
   size_t voxels_filled;   /* gap voxels given a label */
   long long iterations;   /* solver steps, all runs */
+  double solver_seconds;  /* the morphs' time, summed over the gaps (thread time) */
   double seconds;         /* wall clock of the runs */
   size_t box_cells_max;   /* the largest box, in cells of a slice */
   int threads;
