@@ -37,6 +37,9 @@
  * callers never pass NaN; a NaN in phi is caught by the driver). */
 LSM_FN float lsm_maxf(float a, float b) { return a > b ? a : b; }
 LSM_FN float lsm_minf(float a, float b) { return a < b ? a : b; }
+/* A cell outside the narrow band (solver/pde/lsm_band.h): phi_target + amplitude g, g the
+ * relaxation of a cell where phi is a distance over the steps taken. */
+LSM_FN float lsm_relaxed(float target, float amplitude, float g) { return target + amplitude * g; }
 /* One strictly positive and the other strictly negative. */
 LSM_FN int lsm_opposite(float a, float b) { return (a > 0.0f && b < 0.0f) || (a < 0.0f && b > 0.0f); }
 
@@ -79,6 +82,15 @@ LSM_FN float lsm_cfl_rate(float F, float dxm, float dxp, float dym, float dyp, f
   return LSM_FABS(F) * r;
 }
 
+/* The largest rate a cell where |phi - phi_target| = |F| can take whatever its gradient:
+ * upwind (and WENO5) |F| sqrt(1/dx^2 + 1/dy^2), written so no square overflows; Roe-Fix
+ * |F| (1/dx + 1/dy). */
+LSM_FN float lsm_cfl_rate_bound(int roefix, float F, float inv_dx, float inv_dy) {
+  if (roefix) return LSM_FABS(F) * (inv_dx + inv_dy);
+  const float a = lsm_maxf(inv_dx, inv_dy), t = lsm_minf(inv_dx, inv_dy) / a;
+  return LSM_FABS(F) * a * LSM_SQRT(1.0f + t * t);
+}
+
 /* The rate of a scheme: roefix 0 (upwind) or 1 (Roe-Fix).  A cell flat in all
  * four differences (an empty slice's constant value) moves nothing: rate 0,
  * however large F is there; flat along one axis only is not enough, since it
@@ -91,11 +103,10 @@ LSM_FN float lsm_cfl_rate_of(int roefix, float F, float dxm, float dxp, float dy
     if (inv_dx == inv_dy || flat) return rate;
     /* Unequal spacing: the pairwise rate can grow by up to max(dx,dy)/min(dx,dy)
      * once the front turns, and the step is fixed from phi_0: the bound over
-     * all directions, |F| sqrt(1/dx^2 + 1/dy^2), written so no square overflows. */
-    const float a = lsm_maxf(inv_dx, inv_dy), t = lsm_minf(inv_dx, inv_dy) / a;
-    return lsm_maxf(rate, LSM_FABS(F) * a * LSM_SQRT(1.0f + t * t));
+     * all directions. */
+    return lsm_maxf(rate, lsm_cfl_rate_bound(0, F, inv_dx, inv_dy));
   }
-  return flat ? 0.0f : LSM_FABS(F) * (inv_dx + inv_dy);
+  return flat ? 0.0f : lsm_cfl_rate_bound(1, F, inv_dx, inv_dy);
 }
 
 /* ---- Roe-Fix (Osher & Fedkiw ch. 5.3; solver/README.md §4) -------------------------

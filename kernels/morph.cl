@@ -9,6 +9,8 @@
  *   lsm_cfl_partial    max of lsm_cfl_rate per work-group
  *   lsm_residual_partial  sum of (phi - phi_target)^2 per work-group
  *   lsm_reinit_step    one Russo–Smereka pseudo-time step
+ * the same on the narrow band's cells (lsm_band_*: stages, CFL and residual partials,
+ * reinitialisation) and its rim and entering cells (lsm_band_fill_rim, lsm_band_write),
  * and the particle level set (solver/pde/lsm_particles.c on the C path):
  *   lsm_pcl_velocity   the stage's node field F, grad phi (build_velocity)
  *   lsm_pcl_advect     one Runge–Kutta stage of every particle (lsm_pls_stage)
@@ -41,6 +43,9 @@
 
 #ifndef LSM_GHOST
 #error "build with -DLSM_GHOST=<ghost width of solver/base/lsm_grid.h>"
+#endif
+#ifndef LSM_BAND_SEGMENT
+#error "build with -DLSM_BAND_SEGMENT=<segment of solver/pde/lsm_band.h>"
 #endif
 
 /* Offset of interior cell (i, j).  int arithmetic: the host refuses grids of
@@ -207,6 +212,80 @@ __kernel void lsm_residual_partial(__global const float *phi, __global const flo
   scratch[lid] = sum + (s2.x + s2.y);
   LSM_CL_COMBINE(scratch, lid, n, LSM_CL_ADD,
                  partial[get_group_id(1) * get_num_groups(0) + get_group_id(0)]);
+}
+
+/* ---- the narrow band (solver/pde/lsm_band.h) ------------------------------------------------
+ * The band's cells are row segments of at most LSM_BAND_SEGMENT cells: seg[2 q] is the buffer
+ * offset of segment q's first cell, seg[2 q + 1] its length.  Work-item w takes cell
+ * w % LSM_BAND_SEGMENT of segment w / LSM_BAND_SEGMENT (1D NDRanges rounded up to whole groups
+ * of a power of two). */
+inline int lsm_cl_band_cell(__global const int *seg, int nseg, int *k) {
+  const int w = (int)get_global_id(0), q = w / LSM_BAND_SEGMENT, lane = w - q * LSM_BAND_SEGMENT;
+  if (q >= nseg || lane >= seg[2 * q + 1]) return 0;
+  *k = seg[2 * q] + lane;
+  return 1;
+}
+
+#define LSM_CL_BAND_STAGE_KERNEL(name, cell)                                                 \
+  __kernel void name(__global float *out, __global const float *u0,                        \
+                     __global const float *in, __global const float *target,               \
+                     __global const int *seg, int nseg, int stride, float inv_dx,          \
+                     float inv_dy, float c0, float c1, float dt) {                         \
+    int k;                                                                                 \
+    if (lsm_cl_band_cell(seg, nseg, &k))                                                   \
+      out[k] = cell(u0, in, target, k, stride, inv_dx, inv_dy, c0, c1, dt);                \
+  }
+
+LSM_CL_BAND_STAGE_KERNEL(lsm_band_stage_upwind, lsm_stage_upwind_at)
+LSM_CL_BAND_STAGE_KERNEL(lsm_band_stage_roefix, lsm_stage_roefix_at)
+LSM_CL_BAND_STAGE_KERNEL(lsm_band_stage_weno5, lsm_stage_weno5_at)
+
+__kernel void lsm_band_reinit_step(__global float *next, __global const float *phi,
+                                   __global const float *phi0, __global const int *seg, int nseg,
+                                   int stride, float inv_dx, float inv_dy, float h, float dtau) {
+  int k;
+  if (lsm_cl_band_cell(seg, nseg, &k))
+    next[k] = lsm_reinit_at(phi, phi0, k, stride, inv_dx, inv_dy, h, dtau);
+}
+
+/* max of lsm_cfl_rate over the band per work-group (phi's rim and ghosts filled). */
+__kernel void lsm_band_cfl_partial(__global const float *phi, __global const float *target,
+                                   __global const int *seg, int nseg, int stride, float inv_dx,
+                                   float inv_dy, int roefix, __local float *scratch,
+                                   __global float *partial) {
+  const int lid = (int)get_local_id(0), n = (int)get_local_size(0);
+  int k;
+  scratch[lid] = lsm_cl_band_cell(seg, nseg, &k)
+                     ? lsm_cfl_rate_at(phi, target, k, stride, inv_dx, inv_dy, roefix)
+                     : 0.0f;
+  LSM_CL_COMBINE(scratch, lid, n, max, partial[get_group_id(0)]);
+}
+
+/* Sum of (phi - target)^2 over the band per work-group, in float (the host adds in double). */
+__kernel void lsm_band_residual_partial(__global const float *phi, __global const float *target,
+                                        __global const int *seg, int nseg,
+                                        __local float *scratch, __global float *partial) {
+  const int lid = (int)get_local_id(0), n = (int)get_local_size(0);
+  int k;
+  float d = 0.0f;
+  if (lsm_cl_band_cell(seg, nseg, &k)) d = phi[k] - target[k];
+  scratch[lid] = d * d;
+  LSM_CL_COMBINE(scratch, lid, n, LSM_CL_ADD, partial[get_group_id(0)]);
+}
+
+/* The rim's cells of a field (buffer offsets rim[q], amplitudes amp[q]): lsm_relaxed. */
+__kernel void lsm_band_fill_rim(__global float *f, __global const float *target,
+                                __global const int *rim, __global const float *amp, int n,
+                                float g) {
+  const int q = (int)get_global_id(0);
+  if (q < n) f[rim[q]] = lsm_relaxed(target[rim[q]], amp[q], g);
+}
+
+/* f[cells[q]] = values[q]. */
+__kernel void lsm_band_write(__global float *f, __global const int *cells,
+                             __global const float *values, int n) {
+  const int q = (int)get_global_id(0);
+  if (q < n) f[cells[q]] = values[q];
 }
 
 /* ---- particle level set ----------------------------------------------------------------

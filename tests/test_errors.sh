@@ -75,8 +75,7 @@ expect() {
 # good: 3 discs of 32x32; b-KIND: a good slice and a broken one; k-KIND: 3 discs
 # in each colour type and bit depth; the rest as named below.
 for i in 1 2 3; do png gray8 "good/$i.png" 32 $((3 + 2 * i)); done
-for i in 1 2 3; do png gray8 "late/$i.png" 128 30; done # late: only the last two gaps move
-png gray8 late/4.png 128 5
+for i in 1 2 3 4; do png gray8 "late/$i.png" 128 5; done # late: only the last gap moves
 png gray8 late/5.png 128 40
 for i in 1 2 3 4 5 6 7 8 9; do # tall: 9 discs; tall40: the same on 40x40
   png gray8 "tall/$i.png" 32 $((4 + i))

@@ -341,8 +341,9 @@ static double rel_diff(double a, double b) {
   return m > 0.0 ? fabs(a - b) / m : 0.0;
 }
 
-static void test_morph_matches_c(void **state) {
-  const morph_case *mc = *state;
+/* band: both run the narrow band (lsm_fields_band_start, rebuilt by lsm_fields_band_maintain
+ * after every step, as lsm_morph does). */
+static void morph_matches_c(const morph_case *mc, int band) {
   NEED_DEVICE();
   const int nx = mc->nx, ny = mc->ny, steps = 200;
   lsm_grid *src = new_grid(nx, ny, mc->dx, mc->dy), *dst = new_grid(nx, ny, mc->dx, mc->dy);
@@ -353,9 +354,16 @@ static void test_morph_matches_c(void **state) {
   lsm_err_clear(&err);
   assert_int_equal(lsm_fields_create(NULL, src, dst, 1, &cs, &err), LSM_OK);
   assert_int_equal(lsm_fields_create(fx.cl, src, dst, 1, &gs, &err), LSM_OK);
+  lsm_band_params bp;
+  lsm_band_params_of(mc->scheme, mc->dx, mc->dy, &bp);
+  if (band) {
+    assert_int_equal(lsm_fields_band_start(cs, dst, &bp, &err), LSM_OK);
+    if (lsm_fields_band_start(gs, dst, &bp, &err) != LSM_OK) fail_msg("%s", err.msg);
+  }
 
   double dt_c = 0.0, dt_g = 0.0, res_c = 0.0, res_g = 0.0;
   double worst_dt = 0.0, worst_res = 0.0, res0 = 0.0;
+  int rebuilds = 0;
   assert_int_equal(lsm_fields_cfl_dt(cs, mc->scheme, 0.75, &dt_c, &err), LSM_OK);
   assert_int_equal(lsm_fields_cfl_dt(gs, mc->scheme, 0.75, &dt_g, &err), LSM_OK);
   worst_dt = rel_diff(dt_c, dt_g);
@@ -368,6 +376,11 @@ static void test_morph_matches_c(void **state) {
       assert_int_equal(lsm_fields_reinit(cs, 10, &err), LSM_OK);
       assert_int_equal(lsm_fields_reinit(gs, 10, &err), LSM_OK);
     }
+    int rebuilt_c = 0, rebuilt_g = 0;
+    assert_int_equal(lsm_fields_band_maintain(cs, &rebuilt_c, &err), LSM_OK);
+    assert_int_equal(lsm_fields_band_maintain(gs, &rebuilt_g, &err), LSM_OK);
+    assert_int_equal(rebuilt_c, rebuilt_g);
+    rebuilds += rebuilt_c;
     assert_int_equal(lsm_fields_residual(cs, &res_c, &err), LSM_OK);
     assert_int_equal(lsm_fields_residual(gs, &res_g, &err), LSM_OK);
     double r = rel_diff(res_c, res_g);
@@ -391,16 +404,23 @@ static void test_morph_matches_c(void **state) {
       mask_diff += (a <= 0.0f) != (b <= 0.0f);
     }
   const double extent = (nx > ny ? nx : ny) * (double)mc->dx;
-  print_message("opencl: %-7s %-5s reinit %-2d %dx%d: max|phi_cl - phi_c| = %.3g (limit %.3g), "
+  print_message("opencl: %-7s %-5s reinit %-2d %dx%d%s: max|phi_cl - phi_c| = %.3g (limit %.3g), "
                 "masks differ in %ld cells, dt rel %.2g, residual rel %.2g (final %.6g)\n",
                 lsm_scheme_name(mc->scheme), lsm_time_name(mc->time), mc->reinit_every, nx, ny,
-                max_diff, 1e-4 * extent, mask_diff, worst_dt, worst_res, res_c);
+                band ? " band" : "", max_diff, 1e-4 * extent, mask_diff, worst_dt, worst_res,
+                res_c);
   assert_true(max_diff <= 1e-4 * extent);
   assert_true((double)mask_diff <= 0.001 * nx * ny);
   assert_true(worst_dt <= 1e-5);
   assert_true(worst_res <= 1e-5);
-  /* The morph moved: the residual fell. */
-  assert_true(res_c < 0.5 * res0);
+  /* The morph moved: the residual fell (with the band, over the whole grid); the band was
+   * rebuilt and covers less than the grid. */
+  if (band) {
+    assert_true(lsm_grid_diff_norm(ref, dst, 1) < 0.5 * lsm_grid_diff_norm(src, dst, 1));
+    assert_true(rebuilds > 0 && lsm_fields_cells(cs) < (long long)nx * ny);
+  } else {
+    assert_true(res_c < 0.5 * res0);
+  }
   lsm_fields_destroy(&cs);
   lsm_fields_destroy(&gs);
   lsm_grid_destroy(&src);
@@ -424,7 +444,11 @@ static const morph_case cases[] = {
     {LSM_SCHEME_WENO5, LSM_TIME_RK3, 10, 53, 131, 0.5f, 0.75f},
 };
 
+static void test_morph_matches_c(void **state) { morph_matches_c(*state, 0); }
+static void test_band_matches_c(void **state) { morph_matches_c(*state, 1); }
+
 #define MORPH(k, name) {name, test_morph_matches_c, NULL, NULL, (void *)&cases[k]}
+#define BAND(k, name) {name " band", test_band_matches_c, NULL, NULL, (void *)&cases[k]}
 
 /* ------------------------------------------------------------------------ */
 /* particles                                                                 */
@@ -555,8 +579,7 @@ static void fill_pls_pair(lsm_grid *src, lsm_grid *dst) {
 
 /* The pls morph through lsm_morph on both backends (as the pair driver runs
  * it), 240 steps. */
-static void test_pls_matches_c(void **state) {
-  const pls_case *pc = *state;
+static void pls_matches_c(const pls_case *pc, int band) {
   NEED_DEVICE();
   const int nx = pc->nx, ny = pc->ny, steps = 240;
   lsm_grid *src = new_grid(nx, ny, pc->dx, pc->dy), *dst = new_grid(nx, ny, pc->dx, pc->dy);
@@ -571,6 +594,7 @@ static void test_pls_matches_c(void **state) {
   o.particles = 1;
   o.pls.reseed_every = pc->reseed_every;
   o.pls.radius_adjust = pc->radius_adjust;
+  o.band = band;
   lsm_morph *mc = NULL, *mg = NULL;
   lsm_err err;
   lsm_err_clear(&err);
@@ -601,12 +625,13 @@ static void test_pls_matches_c(void **state) {
   const long long live_c = qc->seeded - qc->discarded - qc->left_domain - qc->reseed_dropped;
   const long long live_g = qg->seeded - qg->discarded - qg->left_domain - qg->reseed_dropped;
   const double extent = (nx > ny ? nx * (double)pc->dx : ny * (double)pc->dy);
-  print_message("opencl: pls %-7s %-5s reseed %d radius %d %s %dx%d: max|phi_cl - phi_c| = %.3g "
+  print_message("opencl: pls %-7s %-5s reseed %d radius %d %s %dx%d%s: max|phi_cl - phi_c| = %.3g "
                 "(limit %.3g), masks differ in %ld cells; particles C/CL: seeded %lld/%lld, "
                 "live %lld/%lld, left %lld/%lld (strays %lld/%lld), escaped %lld/%lld, "
                 "corrected %lld/%lld\n",
                 lsm_scheme_name(pc->scheme), lsm_time_name(pc->time), pc->reseed_every,
-                pc->radius_adjust, pc->harsh ? "box" : "disc", nx, ny, max_diff, 1e-4 * extent, mask_diff, qc->seeded,
+                pc->radius_adjust, pc->harsh ? "box" : "disc", nx, ny, band ? " band" : "",
+                max_diff, 1e-4 * extent, mask_diff, qc->seeded,
                 qg->seeded, live_c, live_g, qc->left_domain, qg->left_domain, qc->stray,
                 qg->stray, qc->escaped_total, qg->escaped_total, qc->corrected_total,
                 qg->corrected_total);
@@ -654,7 +679,11 @@ static const pls_case pls_cases[] = {
     {LSM_SCHEME_UPWIND, LSM_TIME_EULER, 60, 0, 96, 80, 1.0f, 1.0f, 1},
 };
 
+static void test_pls_matches_c(void **state) { pls_matches_c(*state, 0); }
+static void test_pls_band_matches_c(void **state) { pls_matches_c(*state, 1); }
+
 #define PLS(k, name) {name, test_pls_matches_c, NULL, NULL, (void *)&pls_cases[k]}
+#define PLSB(k, name) {name " band", test_pls_band_matches_c, NULL, NULL, (void *)&pls_cases[k]}
 
 int main(void) {
   const struct CMUnitTest tests[] = {
@@ -680,6 +709,19 @@ int main(void) {
       MORPH(14, "morph weno5 rk3"),
       MORPH(15, "morph weno5 rk3 reinit"),
       MORPH(16, "morph weno5 rk3 reinit 53x131 dx 0.5 dy 0.75"),
+      BAND(0, "morph upwind euler"),
+      BAND(1, "morph upwind rk2"),
+      BAND(2, "morph upwind rk3"),
+      BAND(3, "morph roe-fix euler"),
+      BAND(4, "morph roe-fix rk2"),
+      BAND(5, "morph roe-fix rk3"),
+      BAND(6, "morph upwind euler reinit"),
+      BAND(8, "morph upwind rk3 reinit"),
+      BAND(11, "morph roe-fix rk3 reinit"),
+      BAND(12, "morph roe-fix rk2 reinit 53x131 dx 0.5 dy 0.75"),
+      BAND(13, "morph weno5 euler"),
+      BAND(14, "morph weno5 rk3"),
+      BAND(16, "morph weno5 rk3 reinit 53x131 dx 0.5 dy 0.75"),
       cmocka_unit_test(test_pls_correct_matches_c),
       PLS(0, "pls upwind euler"),
       PLS(1, "pls upwind rk2"),
@@ -691,6 +733,13 @@ int main(void) {
       PLS(7, "pls upwind rk2 reseed 25 radius adjust"),
       PLS(8, "pls roe-fix rk3 reseed 40 radius adjust 53x131 dx 0.5 dy 0.75"),
       PLS(9, "pls upwind euler reseed 60 (strays on a reseed step)"),
+      PLSB(0, "pls upwind euler"),
+      PLSB(2, "pls upwind rk3"),
+      PLSB(4, "pls roe-fix rk2"),
+      PLSB(6, "pls roe-fix rk2 disc to ellipse"),
+      PLSB(7, "pls upwind rk2 reseed 25 radius adjust"),
+      PLSB(8, "pls roe-fix rk3 reseed 40 radius adjust 53x131 dx 0.5 dy 0.75"),
+      PLSB(9, "pls upwind euler reseed 60 (strays on a reseed step)"),
   };
   return cmocka_run_group_tests_name("test_opencl", tests, group_setup, group_teardown);
 }

@@ -1322,6 +1322,7 @@ static void check_cp_by_definition(const run *r, const lsm_stack_opts *o, int p,
   }
   lsm_morph_opts mo = o->morph;
   mo.track_cp = 1;
+  mo.band = 0; /* per-iteration mode runs the full grid */
   lsm_morph *m = NULL;
   assert_int_equal(lsm_morph_create(phi[0], phi[1], &mo, &m, &err), LSM_OK);
   double prev = 0.0, cp = INFINITY;

@@ -102,6 +102,19 @@ static lsm_status cl_pls_correct(void *state, lsm_pls_stats *stats, lsm_err *err
   return lsm_cl_pls_correct(s->particles, s->grid, stats, err);
 }
 
+static lsm_status cl_band_set(void *state, const lsm_band_lists *lists, lsm_err *err) {
+  return lsm_cl_band_set(((cl_pair *)state)->grid, lists, err);
+}
+
+static lsm_status cl_band_write(void *state, lsm_field field, const int32_t *cells,
+                                const float *values, size_t n, lsm_err *err) {
+  return lsm_cl_band_write(((cl_pair *)state)->grid, field, cells, values, n, err);
+}
+
+static lsm_status cl_fill_rim(void *state, lsm_field field, float g, lsm_err *err) {
+  return lsm_cl_band_fill_rim(((cl_pair *)state)->grid, field, g, err);
+}
+
 static const lsm_backend_ops cl_ops = {
     .facts = cl_facts,
     .close = lsm_cl_context_close,
@@ -119,6 +132,9 @@ static const lsm_backend_ops cl_ops = {
     .pls_load = cl_pls_load,
     .pls_stage = cl_pls_stage,
     .pls_correct = cl_pls_correct,
+    .band_set = cl_band_set,
+    .band_write = cl_band_write,
+    .fill_rim = cl_fill_rim,
 };
 
 const lsm_backend_entry lsm_backend_opencl_entry = {.host_threads = 0,

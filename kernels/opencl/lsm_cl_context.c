@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "solver/base/lsm_grid.h" /* LSM_GHOST */
+#include "solver/pde/lsm_band.h"  /* LSM_BAND_SEGMENT */
 #include "lsm_kernels.h" /* lsm_kernel_source[]: morph.cl + the headers, NUL-terminated */
 
 /* ---- errors ------------------------------------------------------------------------ */
@@ -302,7 +303,9 @@ static lsm_status program_from_source(lsm_cl_ctx *c, const char *options, lsm_er
 const char *const lsm_cl_kernel_names[LSM_CL_K_COUNT] = {
     "lsm_fill_ghosts",  "lsm_stage_upwind", "lsm_stage_roefix", "lsm_stage_weno5", "lsm_cfl_partial",
     "lsm_residual_partial", "lsm_reinit_step", "lsm_pcl_velocity", "lsm_pcl_advect",
-    "lsm_pcl_detect",   "lsm_pcl_apply",    "lsm_pcl_adjust_radius"};
+    "lsm_pcl_detect",   "lsm_pcl_apply",    "lsm_pcl_adjust_radius", "lsm_band_stage_upwind",
+    "lsm_band_stage_roefix", "lsm_band_stage_weno5", "lsm_band_cfl_partial",
+    "lsm_band_residual_partial", "lsm_band_reinit_step", "lsm_band_fill_rim", "lsm_band_write"};
 
 /* Lowers c->max_group to the smallest CL_KERNEL_WORK_GROUP_SIZE of the
  * kernels: a GPU can take fewer work-items per group for a kernel that uses
@@ -414,7 +417,8 @@ lsm_status lsm_cl_context_open(int device, void **ctx, lsm_err *err) {
   if (st == LSM_OK) {
     c->cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
     char options[256];
-    snprintf(options, sizeof options, "-cl-std=CL1.2 -DLSM_GHOST=%d%s%s", LSM_GHOST,
+    snprintf(options, sizeof options, "-cl-std=CL1.2 -DLSM_GHOST=%d -DLSM_BAND_SEGMENT=%d%s%s",
+             LSM_GHOST, LSM_BAND_SEGMENT,
              (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? " -cl-fp32-correctly-rounded-divide-sqrt"
                                                         : "",
              c->cpu ? " -DLSM_CL_SERIAL_COMBINE" : "");

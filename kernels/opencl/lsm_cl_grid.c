@@ -79,6 +79,7 @@ static lsm_status fill_ghosts(lsm_cl_grid *g, cl_mem buf, lsm_err *err) {
 void lsm_cl_grid_destroy(lsm_cl_grid *g) {
   if (!g) return;
   if (g->queue) clFinish(g->queue);
+  lsm_cl_band_destroy(g);
   for (int k = 0; k < LSM_CL_K_COUNT; ++k)
     if (g->k[k]) clReleaseKernel(g->k[k]);
   for (int f = 0; f < LSM_FIELD_COUNT; ++f)
@@ -173,6 +174,14 @@ lsm_status lsm_cl_grid_create(lsm_cl_ctx *c, const lsm_grid *src, const lsm_grid
   if (st == LSM_OK) st = lsm_cl_buffer(g, bytes, &g->field[LSM_FIELD_STAGE2], err);
   if (st == LSM_OK) st = lsm_cl_buffer(g, g->npartial * sizeof(float), &g->partial, err);
   if (st == LSM_OK) st = lsm_grid_create(g->nx, g->ny, g->dx, g->dy, &g->host, err);
+  /* the scratch fields start at zero, as the C backend's (the narrow band leaves cells of
+   * them unwritten, which nothing reads) */
+  const cl_float zero = 0.0f;
+  for (int f = LSM_FIELD_STAGE1; st == LSM_OK && f <= LSM_FIELD_STAGE2; ++f) {
+    const cl_int e2 = clEnqueueFillBuffer(g->queue, g->field[f], &zero, sizeof zero, 0, bytes, 0,
+                                          NULL, NULL);
+    if (e2 != CL_SUCCESS) st = lsm_cl_fail(err, c->name, "clEnqueueFillBuffer", e2);
+  }
   if (st == LSM_OK) st = write_grid(g, g->field[LSM_FIELD_PHI], src, err);
   if (st == LSM_OK) st = write_grid(g, g->target, tgt, err);
   if (st == LSM_OK) st = fill_ghosts(g, g->target, err);
@@ -204,6 +213,7 @@ void lsm_cl_grid_swap(lsm_cl_grid *g, lsm_field a, lsm_field b) {
 
 lsm_status lsm_cl_grid_stage(lsm_cl_grid *g, lsm_scheme scheme, lsm_field out, lsm_field u0,
                              lsm_field in, float c0, float c1, float dt, lsm_err *err) {
+  if (g->band) return lsm_cl_band_stage(g, scheme, out, u0, in, c0, c1, dt, err);
   const float inv_dx = 1.0f / g->dx, inv_dy = 1.0f / g->dy;
   cl_kernel k = g->k[scheme == LSM_SCHEME_ROEFIX  ? LSM_CL_K_ROEFIX
                      : scheme == LSM_SCHEME_WENO5 ? LSM_CL_K_WENO5
@@ -236,6 +246,7 @@ static lsm_status reduce(lsm_cl_grid *g, cl_kernel k, const lsm_cl_arg *args, in
 }
 
 lsm_status lsm_cl_grid_max_rate(lsm_cl_grid *g, lsm_scheme scheme, float *rate, lsm_err *err) {
+  if (g->band) return lsm_cl_band_max_rate(g, scheme, rate, err);
   const float inv_dx = 1.0f / g->dx, inv_dy = 1.0f / g->dy;
   const cl_int roefix = scheme == LSM_SCHEME_ROEFIX;
   const lsm_cl_arg args[] = {LSM_CL_ARG(g->field[LSM_FIELD_PHI]), LSM_CL_ARG(g->target),
@@ -253,6 +264,7 @@ lsm_status lsm_cl_grid_max_rate(lsm_cl_grid *g, lsm_scheme scheme, float *rate, 
 /* The device sums in float (partial sums added in double here), which overflows where
  * lengths are near 1e18 or more (allowed up to 1e30): then the host's sum in double. */
 lsm_status lsm_cl_grid_residual(lsm_cl_grid *g, double *norm, lsm_err *err) {
+  if (g->band) return lsm_cl_band_residual(g, norm, err);
   const lsm_cl_arg args[] = {LSM_CL_ARG(g->field[LSM_FIELD_PHI]), LSM_CL_ARG(g->target),
                              LSM_CL_ARG(g->nx), LSM_CL_ARG(g->ny), LSM_CL_ARG(g->stride),
                              LSM_CL_ARG(g->c->red_run)};
@@ -261,18 +273,22 @@ lsm_status lsm_cl_grid_residual(lsm_cl_grid *g, double *norm, lsm_err *err) {
   for (size_t q = 0; q < g->npartial; ++q) total += (double)g->partial_host[q];
   *norm = sqrt(total);
   if (isfinite(*norm)) return LSM_OK;
-  if (!g->host_target) {
-    LSM_TRY(lsm_grid_create(g->nx, g->ny, g->dx, g->dy, &g->host_target, err));
-    LSM_TRY(read_grid(g, g->target, g->host_target, err));
-  }
+  LSM_TRY(lsm_cl_grid_host_target(g, err));
   LSM_TRY(read_grid(g, g->field[LSM_FIELD_PHI], g->host, err));
   *norm = lsm_grid_diff_norm(g->host, g->host_target, g->threads);
   return LSM_OK;
 }
 
+lsm_status lsm_cl_grid_host_target(lsm_cl_grid *g, lsm_err *err) {
+  if (g->host_target) return LSM_OK;
+  LSM_TRY(lsm_grid_create(g->nx, g->ny, g->dx, g->dy, &g->host_target, err));
+  return read_grid(g, g->target, g->host_target, err);
+}
+
 lsm_status lsm_cl_grid_reinit_sweep(lsm_cl_grid *g, lsm_field out, lsm_field in, lsm_err *err) {
   if (!g->field[LSM_FIELD_PHI0])
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "reinitialisation: phi0 was not taken");
+  if (g->band) return lsm_cl_band_reinit_sweep(g, out, in, err);
   const float inv_dx = 1.0f / g->dx, inv_dy = 1.0f / g->dy;
   const float h = lsm_reinit_h(g->dx, g->dy), dtau = lsm_reinit_dtau(h);
   cl_kernel k = g->k[LSM_CL_K_REINIT];

@@ -34,6 +34,7 @@ typedef struct lsm_cl_grid {
   size_t global[2];    /* cell kernels' NDRange: nx rounded up to LX, ny */
   size_t red_global[2];
   size_t ghost_global; /* ring cells, rounded up */
+  struct lsm_cl_band *band; /* the narrow band (lsm_cl_band.c), once set; NULL: every cell */
 } lsm_cl_grid;
 
 /* The grid ops of lsm_backend_ops on a state (see there). */
@@ -50,8 +51,22 @@ lsm_status lsm_cl_grid_residual(lsm_cl_grid *g, double *norm, lsm_err *err);
 lsm_status lsm_cl_grid_reinit_sweep(lsm_cl_grid *g, lsm_field out, lsm_field in, lsm_err *err);
 lsm_status lsm_cl_grid_read_phi(lsm_cl_grid *g, const lsm_grid **phi, lsm_err *err);
 lsm_status lsm_cl_grid_upload(lsm_cl_grid *g, const lsm_grid *phi, lsm_err *err);
+/* phi_target read to the host once (g->host_target), for sums in double there. */
+lsm_status lsm_cl_grid_host_target(lsm_cl_grid *g, lsm_err *err);
 
-/* ---- for the kernels of other modules (particles) ---- */
+/* ---- the narrow band (lsm_cl_band.c): the band ops, and the cell ops on the band ---- */
+lsm_status lsm_cl_band_set(lsm_cl_grid *g, const lsm_band_lists *lists, lsm_err *err);
+lsm_status lsm_cl_band_write(lsm_cl_grid *g, lsm_field field, const int32_t *cells,
+                             const float *values, size_t n, lsm_err *err);
+lsm_status lsm_cl_band_fill_rim(lsm_cl_grid *g, lsm_field field, float g_relax, lsm_err *err);
+void lsm_cl_band_destroy(lsm_cl_grid *g);
+lsm_status lsm_cl_band_stage(lsm_cl_grid *g, lsm_scheme scheme, lsm_field out, lsm_field u0,
+                             lsm_field in, float c0, float c1, float dt, lsm_err *err);
+lsm_status lsm_cl_band_max_rate(lsm_cl_grid *g, lsm_scheme scheme, float *rate, lsm_err *err);
+lsm_status lsm_cl_band_residual(lsm_cl_grid *g, double *norm, lsm_err *err);
+lsm_status lsm_cl_band_reinit_sweep(lsm_cl_grid *g, lsm_field out, lsm_field in, lsm_err *err);
+
+/* ---- for the kernels of other modules (particles, band) ---- */
 
 /* A kernel argument: LSM_CL_ARG(value) for a variable, {bytes, NULL} for __local memory. */
 typedef struct lsm_cl_arg {

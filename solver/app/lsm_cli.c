@@ -24,6 +24,7 @@ static const char *const interp_names[] = {LSM_INTERP_LIST(LSM_ENUM_TEXT)};
 static const char *const ends_names[] = {LSM_ENDS_LIST(LSM_ENUM_TEXT)};
 static const char *const align_names[] = {LSM_ALIGN_LIST(LSM_ENUM_TEXT)};
 static const char *const backend_names[] = {LSM_BACKEND_TABLE(LSM_BACKEND_NAME) "auto"};
+static const char *const band_names[] = {"off", "on"};
 
 LSM_NAME_FUNCTIONS(lsm_nrrd_encoding, LSM_NRRD_ENCODING_LIST, lsm_nrrd_encoding_name,
                    lsm_nrrd_encoding_from_name)
@@ -108,6 +109,8 @@ static const help_row reconstruct_rows[] = {
                                      "(default upwind; weno5 with --time rk3)"),
     CHOOSE("--time", time_names, "time integrator (default euler)"),
     OPT("--cfl C", "CFL number (default 0.75; monotone up to 1)"),
+    CHOOSE("--band", band_names, "update only the cells near the front (on, the\n"
+                                 "default) or every cell (off: for comparisons)"),
     OPT("--max-iter N", "most solver steps per morph (default 100000)"),
     OPT("--reinit-every N", "reinitialise phi every N steps (default 0: never)"),
     OPT("--reinit-iters N", "iterations per reinitialisation (default 10)"),
@@ -474,6 +477,7 @@ static lsm_status reconstruct_option(arg_cursor *c, const char *name, const char
   else if (IS("--scheme")) CHOICE(scheme_names, so->morph.scheme);
   else if (IS("--time")) CHOICE(time_names, so->morph.time);
   else if (IS("--cfl")) CALL(parse_double(name, v, &so->morph.cfl, 1, err));
+  else if (IS("--band")) CHOICE(band_names, so->morph.band);
   else if (IS("--reinit-every")) INT(0, INT_MAX, so->morph.reinit_every);
   else if (IS("--reinit-iters")) INT(1, 100000, so->morph.reinit_iters);
   else if (IS("--tol")) CALL(parse_double(name, v, &so->tol, 1, err));

@@ -56,6 +56,8 @@ static void write_options(FILE *f, const lsm_run_record *run) {
   fputs("]", f);
   fputs(", \"cfl\": ", f);
   lsm_json_number(f, o->morph.cfl);
+  /* as the run used it: per-iteration mode runs the full grid */
+  fprintf(f, ", \"band\": \"%s\"", o->morph.band && !o->per_iteration ? "on" : "off");
   fprintf(f, ", \"reinit_every\": %d, \"reinit_iters\": %d, \"tol\": ", o->morph.reinit_every,
           o->morph.reinit_iters);
   lsm_json_number(f, o->tol);
@@ -123,7 +125,7 @@ static void write_pairs(FILE *f, const lsm_run_record *run) {
   const lsm_pair_stats *stats = run->stats;
   const lsm_stack_opts *o = &run->cli->stack;
   fputs("  \"pairs\": [\n", f);
-  long long iterations = 0, updates = 0;
+  long long iterations = 0, updates = 0, full = 0;
   double seconds = 0.0;
   for (size_t k = 0; k + 1 < src->count; ++k) {
     const lsm_pair_stats *p = &stats[k];
@@ -137,7 +139,12 @@ static void write_pairs(FILE *f, const lsm_run_record *run) {
     lsm_json_number(f, p->cp);
     fputs(", \"seconds\": ", f);
     lsm_json_number(f, p->seconds);
-    fprintf(f, ", \"cells\": %lld, \"t_final\": ", p->cells);
+    const long long stages = lsm_time_stages(o->morph.time);
+    const long long pair_full = (long long)p->iterations * p->cells * stages;
+    fprintf(f, ", \"cells\": %lld, \"cell_updates\": %lld, \"band_share\": ", p->cells,
+            p->cell_updates);
+    lsm_json_number(f, pair_full > 0 ? (double)p->cell_updates / (double)pair_full : NAN);
+    fputs(", \"t_final\": ", f);
     lsm_json_number(f, p->t_final);
     fprintf(f, ", \"slices\": %zu, \"hit_max_iter\": %s, \"rank\": %d", p->slices,
             json_bool(p->hit_max_iter), p->rank);
@@ -152,7 +159,8 @@ static void write_pairs(FILE *f, const lsm_run_record *run) {
     }
     fprintf(f, "}%s\n", k + 2 < src->count ? "," : "");
     iterations += p->iterations;
-    updates += (long long)p->iterations * p->cells * lsm_time_stages(o->morph.time);
+    updates += p->cell_updates;
+    full += pair_full;
     seconds += p->seconds;
   }
   fprintf(f, "  ],\n  \"totals\": {\"pairs\": %zu, \"iterations\": %lld, \"seconds\": ",
@@ -162,6 +170,8 @@ static void write_pairs(FILE *f, const lsm_run_record *run) {
   lsm_json_number(f, run->wall_seconds);
   fprintf(f, ", \"cell_updates\": %lld, \"cells_per_second\": ", updates);
   lsm_json_number(f, seconds > 0 ? (double)updates / seconds : NAN);
+  fputs(", \"band_share\": ", f);
+  lsm_json_number(f, full > 0 ? (double)updates / (double)full : NAN);
   int ranks = 1;
   for (size_t k = 0; k + 1 < src->count; ++k)
     if (stats[k].rank + 1 > ranks) ranks = stats[k].rank + 1;

@@ -12,8 +12,8 @@
  * shared (kernels/), so they give the same numbers.  What only one backend knows (its device,
  * an OpenCL program's build time) it reports as facts (ops.facts), which run.json prints.
  *
- * Cell ops act on every interior cell.  A narrow band (issue 56) will add an optional op that
- * restricts them to a set of active cells; the ops keep their meaning over that set.
+ * Cell ops act on every interior cell until the optional band ops (the narrow band,
+ * lsm_band.h) restrict them to the band's cells; the ops keep their meaning over that set.
  */
 #ifndef LSM_BACKEND_H
 #define LSM_BACKEND_H
@@ -22,6 +22,7 @@
 
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_status.h"
+#include "solver/pde/lsm_band.h"
 #include "solver/pde/lsm_particles.h"
 #include "solver/pde/lsm_scheme.h"
 
@@ -91,6 +92,15 @@ typedef struct lsm_backend_ops {
   lsm_status (*pls_stage)(void *state, lsm_field in, float c0, float c1, float dt, int stage,
                           int stages, lsm_err *err);
   lsm_status (*pls_correct)(void *state, lsm_pls_stats *stats, lsm_err *err);
+  /* ---- optional: the narrow band (all or none) --------------------------------------------
+   * band_set: from now on stage, max_rate, residual and reinit_sweep act on the cells of the
+   * band's runs only, and fill_rim on its rim (lists' arrays stay valid until the next
+   * band_set or destroy; the enter lists are not read).  band_write: field[cells[q]] =
+   * values[q].  fill_rim: field at each rim cell = lsm_relaxed(phi_target, its amplitude, g). */
+  lsm_status (*band_set)(void *state, const lsm_band_lists *lists, lsm_err *err);
+  lsm_status (*band_write)(void *state, lsm_field field, const int32_t *cells,
+                           const float *values, size_t n, lsm_err *err);
+  lsm_status (*fill_rim)(void *state, lsm_field field, float g, lsm_err *err);
 } lsm_backend_ops;
 
 /* One row of the table of backends. */

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "solver/pde/lsm_backend.h"
+#include "kernels/lsm_cell.h"
 #include "solver/pde/lsm_reinit.h"
 
 typedef struct c_ctx {
@@ -16,6 +17,11 @@ typedef struct c_state {
   lsm_particles *pls; /* the loaded particle set (pls_load) */
   int radius_adjust;
   int threads;
+  lsm_runs band;          /* the narrow band's cells (band_set), ... */
+  const lsm_runs *cells;  /* ... which the cell ops sweep: &band, or NULL for every cell */
+  const int32_t *rim;     /* the rim (fill_rim) */
+  const float *rim_amplitude;
+  size_t rim_cells;
 } c_state;
 
 static lsm_status c_open(int device, int threads, void **ctx, lsm_err *err) {
@@ -88,22 +94,23 @@ static lsm_status c_stage(void *state, lsm_scheme scheme, lsm_field out, lsm_fie
                           lsm_field in, float c0, float c1, float dt, lsm_err *err) {
   (void)err;
   c_state *s = state;
-  lsm_scheme_stage(scheme, s->field[out], s->field[u0], s->field[in], s->phi_target, c0, c1, dt,
-                   s->threads);
+  lsm_scheme_stage_on(scheme, s->field[out], s->field[u0], s->field[in], s->phi_target, c0, c1,
+                      dt, s->cells, s->threads);
   return LSM_OK;
 }
 
 static lsm_status c_max_rate(void *state, lsm_scheme scheme, float *rate, lsm_err *err) {
   (void)err;
   c_state *s = state;
-  *rate = lsm_cfl_max_rate(s->field[LSM_FIELD_PHI], s->phi_target, scheme, s->threads);
+  *rate = lsm_cfl_max_rate_on(s->field[LSM_FIELD_PHI], s->phi_target, scheme, s->cells,
+                              s->threads);
   return LSM_OK;
 }
 
 static lsm_status c_residual(void *state, double *norm, lsm_err *err) {
   (void)err;
   c_state *s = state;
-  *norm = lsm_grid_diff_norm(s->field[LSM_FIELD_PHI], s->phi_target, s->threads);
+  *norm = lsm_grid_diff_norm_on(s->field[LSM_FIELD_PHI], s->phi_target, s->cells, s->threads);
   return LSM_OK;
 }
 
@@ -111,7 +118,8 @@ static lsm_status c_reinit_sweep(void *state, lsm_field out, lsm_field in, lsm_e
   c_state *s = state;
   if (!s->field[LSM_FIELD_PHI0])
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "reinitialisation: phi0 was not taken");
-  lsm_reinit_sweep(s->field[out], s->field[in], s->field[LSM_FIELD_PHI0], s->threads);
+  lsm_reinit_sweep_on(s->field[out], s->field[in], s->field[LSM_FIELD_PHI0], s->cells,
+                      s->threads);
   return LSM_OK;
 }
 
@@ -160,6 +168,38 @@ static lsm_status c_pls_correct(void *state, lsm_pls_stats *stats, lsm_err *err)
   return lsm_pls_correct_into(s->pls, s->field[LSM_FIELD_PHI], stats, err);
 }
 
+/* ---- the narrow band: the driver's lists, borrowed ---------------------------------------- */
+
+static lsm_status c_band_set(void *state, const lsm_band_lists *lists, lsm_err *err) {
+  (void)err;
+  c_state *s = state;
+  s->band = (lsm_runs){lists->run_start, lists->run_length, lists->runs, lists->cells};
+  s->cells = &s->band;
+  s->rim = lists->rim;
+  s->rim_amplitude = lists->rim_amplitude;
+  s->rim_cells = lists->rim_cells;
+  return LSM_OK;
+}
+
+static lsm_status c_band_write(void *state, lsm_field field, const int32_t *cells,
+                               const float *values, size_t n, lsm_err *err) {
+  c_state *s = state;
+  if (!s->field[field]) return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "band: no such field");
+  float *d = s->field[field]->data;
+  for (size_t q = 0; q < n; ++q) d[cells[q]] = values[q];
+  return LSM_OK;
+}
+
+static lsm_status c_fill_rim(void *state, lsm_field field, float g, lsm_err *err) {
+  c_state *s = state;
+  if (!s->field[field]) return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "band: no such field");
+  float *d = s->field[field]->data;
+  const float *t = s->phi_target->data;
+  for (size_t q = 0; q < s->rim_cells; ++q)
+    d[s->rim[q]] = lsm_relaxed(t[s->rim[q]], s->rim_amplitude[q], g);
+  return LSM_OK;
+}
+
 static const lsm_backend_ops c_ops = {
     .facts = c_facts,
     .close = c_close,
@@ -177,6 +217,9 @@ static const lsm_backend_ops c_ops = {
     .pls_load = c_pls_load,
     .pls_stage = c_pls_stage,
     .pls_correct = c_pls_correct,
+    .band_set = c_band_set,
+    .band_write = c_band_write,
+    .fill_rim = c_fill_rim,
 };
 
 const lsm_backend_entry lsm_backend_c_entry = {

@@ -11,6 +11,7 @@
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_status.h"
 #include "solver/pde/lsm_backend.h"
+#include "solver/pde/lsm_band.h"
 #include "solver/pde/lsm_particles.h"
 #include "solver/pde/lsm_scheme.h"
 
@@ -54,5 +55,25 @@ int lsm_fields_has_particles(const lsm_fields *fields);
 lsm_status lsm_fields_pls_load(lsm_fields *fields, const lsm_pls_view *set, int radius_adjust,
                                lsm_err *err);
 lsm_status lsm_fields_pls_correct(lsm_fields *fields, lsm_pls_stats *stats, lsm_err *err);
+
+/* Exchanges two fields (the backend's swap). */
+void lsm_fields_swap(lsm_fields *fields, lsm_field a, lsm_field b);
+
+/* The narrow band (the backend's optional band ops; lsm_band.h).  lsm_fields_band_start: from
+ * now on the cell ops run on the band around phi's kept levels (phi_target, which must stay
+ * valid while the band runs, is where the cells outside it relax to); lsm_fields_phi then
+ * returns phi with the cells outside the band filled.  lsm_fields_band_maintain, after each
+ * step and its corrections: rebuilds the band every params->every steps, or sooner where a
+ * front may appear (*rebuilt = 1: the CFL rate may have changed). */
+int lsm_fields_has_band(const lsm_fields *fields);
+lsm_status lsm_fields_band_start(lsm_fields *fields, const lsm_grid *phi_target,
+                                 const lsm_band_params *params, lsm_err *err);
+lsm_status lsm_fields_band_maintain(lsm_fields *fields, int *rebuilt, lsm_err *err);
+int lsm_fields_banded(const lsm_fields *fields);
+/* The largest |phi - phi_target| of the cells the last rebuild took into the band. */
+float lsm_fields_band_enter_speed(const lsm_fields *fields);
+/* Cell updates of the stages so far (cells swept x stages); the cells a stage sweeps now. */
+long long lsm_fields_cell_updates(const lsm_fields *fields);
+long long lsm_fields_cells(const lsm_fields *fields);
 
 #endif

@@ -2,8 +2,11 @@
 
 #include "solver/pde/lsm_fields.h"
 
+#include "kernels/lsm_cell.h"
+
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 struct lsm_morph {
   lsm_morph_opts opts;
@@ -16,16 +19,19 @@ struct lsm_morph {
   lsm_err err;            /* why the last lsm_morph_phi failed */
   double dt, time, cp, residual;
   int iterations;
+  int still; /* phi_source == phi_target: nothing moves, not even outside the band */
 };
 
 void lsm_morph_opts_default(lsm_morph_opts *opts) {
-  /* the rest 0 / NULL: no reinitialisation, no particles, the C backend, no stop flag */
+  /* the rest 0 / NULL: no reinitialisation, no particles, the C backend, no stop flag; the
+   * narrow band on */
   static const lsm_morph_opts defaults = {.scheme = LSM_SCHEME_UPWIND,
                                           .time = LSM_TIME_EULER,
                                           .cfl = 0.75,
                                           .reinit_iters = 10,
                                           .threads = 1,
-                                          .track_cp = 1};
+                                          .track_cp = 1,
+                                          .band = 1};
   *opts = defaults;
   lsm_pls_opts_default(&opts->pls);
 }
@@ -51,6 +57,24 @@ static lsm_status morph_residual(lsm_morph *m, double *residual, lsm_err *err) {
   if (!phi) return lsm_fail(err, m->err.status, NULL, "%s", m->err.msg);
   *residual = lsm_grid_diff_norm(phi, m->phi_target, m->opts.threads);
   return LSM_OK;
+}
+
+/* The CFL step of phi now; with the band (whose cells outside relax as a distance does,
+ * phi - phi_target times 1 - dt each step, without a CFL bound of their own) at most 1, so
+ * that factor never turns negative (solver/README.md §4). */
+static lsm_status band_dt(lsm_morph *m, lsm_err *err) {
+  double dt;
+  LSM_TRY(lsm_fields_cfl_dt(m->fields, m->opts.scheme, m->opts.cfl, &dt, err));
+  if (lsm_fields_banded(m->fields) && !(dt <= 1.0) && !m->still) dt = 1.0;
+  m->dt = dt;
+  return LSM_OK;
+}
+
+/* Whether two grids hold the same interior values. */
+static int same_interior(const lsm_grid *a, const lsm_grid *b) {
+  for (int j = 0; j < a->ny; ++j)
+    if (memcmp(&LSM_AT(a, 0, j), &LSM_AT(b, 0, j), (size_t)a->nx * sizeof(float)) != 0) return 0;
+  return 1;
 }
 
 /* Loads the seeding set's particles onto the backend. */
@@ -85,7 +109,13 @@ lsm_status lsm_morph_create(const lsm_grid *phi_source, const lsm_grid *phi_targ
     if (st == LSM_OK) st = pls_load(m, err);
     if (st == LSM_OK) m->pls_stats = *lsm_pls_stats_get(m->seeds);
   }
-  if (st == LSM_OK) st = lsm_fields_cfl_dt(m->fields, opts->scheme, opts->cfl, &m->dt, err);
+  if (st == LSM_OK && opts->band && lsm_fields_has_band(m->fields)) {
+    m->still = same_interior(phi_source, phi_target);
+    lsm_band_params bp;
+    lsm_band_params_of(opts->scheme, phi_source->dx, phi_source->dy, &bp);
+    st = lsm_fields_band_start(m->fields, m->phi_target, &bp, err);
+  }
+  if (st == LSM_OK) st = band_dt(m, err);
   /* a rate that overflowed a float gives a step of 0: no step could advance
    * the morph (lsm_morph_advance_to would never arrive) */
   if (st == LSM_OK && !(m->dt > 0.0))
@@ -129,6 +159,17 @@ static lsm_status pls_correct(lsm_morph *m, lsm_err *err) {
   return pls_load(m, err);
 }
 
+/* dt = min(dt, the CFL step of phi now). */
+static lsm_status shrink_dt(lsm_morph *m, const char *after, lsm_err *err) {
+  const double dt = m->dt;
+  LSM_TRY(band_dt(m, err));
+  if (dt < m->dt) m->dt = dt;
+  if (!(m->dt > 0.0))
+    return lsm_fail(err, LSM_ERR_NUMERIC, NULL, "iteration %d: the CFL time step after %s is %g",
+                    m->iterations, after, m->dt);
+  return LSM_OK;
+}
+
 lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
   double dt = m->dt < max_dt ? m->dt : max_dt;
   if (!(dt > 0.0)) return LSM_OK;
@@ -151,13 +192,19 @@ lsm_status lsm_morph_step(lsm_morph *m, double max_dt, lsm_err *err) {
      * reinitialised phi can move faster (steeper where it was flat, farther
      * from phi_target where it was clamped), so the CFL bound is taken again
      * and the step only ever shrinks. */
-    double dt_now;
-    LSM_TRY(lsm_fields_cfl_dt(m->fields, m->opts.scheme, m->opts.cfl, &dt_now, err));
-    if (dt_now < m->dt) m->dt = dt_now;
-    if (!(m->dt > 0.0))
-      return lsm_fail(err, LSM_ERR_NUMERIC, NULL,
-                      "iteration %d: the CFL time step after reinitialisation is %g",
-                      m->iterations, m->dt);
+    LSM_TRY(shrink_dt(m, "reinitialisation", err));
+  }
+  int rebuilt = 0;
+  LSM_TRY(lsm_fields_band_maintain(m->fields, &rebuilt, err));
+  if (rebuilt) {
+    /* cells the band took in may move faster: each one's rate is bounded by its speed
+     * whatever its gradient (kernels/lsm_cell.h) */
+    const lsm_grid *t = m->phi_target;
+    const float rate = lsm_cfl_rate_bound(m->opts.scheme == LSM_SCHEME_ROEFIX,
+                                          lsm_fields_band_enter_speed(m->fields), 1.0f / t->dx,
+                                          1.0f / t->dy);
+    const double entered = lsm_cfl_step(m->opts.cfl, rate);
+    if (entered < m->dt) m->dt = entered;
   }
   if (m->opts.track_cp || m->iterations % 16 == 0) {
     double residual;
@@ -221,6 +268,11 @@ double lsm_morph_dt(const lsm_morph *m) { return m->dt; }
 int lsm_morph_iterations(const lsm_morph *m) { return m->iterations; }
 double lsm_morph_cp(const lsm_morph *m) { return m->cp; }
 double lsm_morph_residual(const lsm_morph *m) { return m->residual; }
+long long lsm_morph_cell_updates(const lsm_morph *m) { return lsm_fields_cell_updates(m->fields); }
+long long lsm_morph_grid_cells(const lsm_morph *m) {
+  return (long long)m->phi_target->nx * m->phi_target->ny;
+}
+int lsm_morph_banded(const lsm_morph *m) { return lsm_fields_banded(m->fields); }
 
 double lsm_morph_time_of_fraction(double s) {
   if (s <= 0.0) return 0.0;

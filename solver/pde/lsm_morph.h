@@ -5,7 +5,9 @@
  *     phi_t + (phi - phi_target) |grad phi| = 0
  * with a fixed step dt = cfl / max(|H1|/dx + |H2|/dy) computed once from
  * phi_source; with reinitialisation the bound is taken again after each one,
- * and dt shrinks if it must.  With particles it seeds them on the host and
+ * and dt shrinks if it must.  With the narrow band (opts.band) only the band's
+ * cells are updated and the maximum is the band's, taken again at each
+ * rebuild (dt only shrinks, and stays <= 1).  With particles it seeds them on the host and
  * has the backend step and correct them.  The pair and stack drivers decide
  * when to stop and what to keep; the morph only steps.
  */
@@ -32,6 +34,8 @@ typedef struct lsm_morph_opts {
   int particles;      /* 1: particle level set correction (Enright et al. 2002) */
   lsm_pls_opts pls;   /* particle options (lsm_pls_opts_default) */
   const lsm_backend *backend; /* where the grid work runs; NULL = the C backend */
+  int band;           /* 1: the narrow band (the default; solver/README.md §4): only cells near
+                         the front are updated, dt from the band's speeds; 0: every cell */
   /* When not NULL: lsm_morph_advance_to stops with LSM_ERR_INTERRUPTED before
    * any step once *stop is non-zero (a signal handler's flag), so a long gap
    * does not run to its end after Ctrl-C. */
@@ -73,6 +77,11 @@ int lsm_morph_iterations(const lsm_morph *morph);
 double lsm_morph_cp(const lsm_morph *morph);
 /* ||phi - phi_T||_2 now. */
 double lsm_morph_residual(const lsm_morph *morph);
+/* Cell updates so far (cells swept by each stage, summed), and whether the band is on. */
+long long lsm_morph_cell_updates(const lsm_morph *morph);
+/* Cells of the grid (the full grid's cells per stage). */
+long long lsm_morph_grid_cells(const lsm_morph *morph);
+int lsm_morph_banded(const lsm_morph *morph);
 
 /* Morph time at which a pair is a fraction s in [0, 1) of the way:
  *   t(s) = -ln(1 - s).

@@ -14,9 +14,13 @@
 #define LSM_REINIT_H
 
 #include "solver/base/lsm_grid.h"
+#include "solver/pde/lsm_scheme.h"
 
 /* One pseudo-time step out <- in, phi0 the field at the start (ghosts of in and
  * phi0 filled); rows in parallel. */
 void lsm_reinit_sweep(lsm_grid *out, const lsm_grid *in, const lsm_grid *phi0, int threads);
+/* The same on the cells of runs (NULL: every cell). */
+void lsm_reinit_sweep_on(lsm_grid *out, const lsm_grid *in, const lsm_grid *phi0,
+                         const lsm_runs *runs, int threads);
 
 #endif

@@ -14,22 +14,28 @@ int lsm_time_stages(lsm_time time) {
 
 /* ---- CFL ------------------------------------------------------------------------ */
 
-float lsm_cfl_max_rate(const lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme,
-                       int threads) {
+float lsm_cfl_max_rate_on(const lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme,
+                          const lsm_runs *runs, int threads) {
   const int roefix = scheme == LSM_SCHEME_ROEFIX;
   const float inv_dx = 1.0f / phi->dx, inv_dy = 1.0f / phi->dy;
-  const ptrdiff_t s = phi->stride;
+  const ptrdiff_t s = phi->stride, n = lsm_runs_count(phi, runs);
   const float *p = phi->data, *t = phi_target->data;
   float rate = 0.0f;
-#pragma omp parallel for num_threads(lsm_grid_threads(phi, threads)) schedule(static) reduction(max : rate)
-  for (int j = 0; j < phi->ny; ++j) {
-    const ptrdiff_t row = (ptrdiff_t)j * s;
+#pragma omp parallel for num_threads(lsm_runs_threads(phi, runs, threads)) schedule(static) reduction(max : rate)
+  for (ptrdiff_t q = 0; q < n; ++q) {
+    const ptrdiff_t row = lsm_runs_start(phi, runs, q);
+    const int len = lsm_runs_length(phi, runs, q);
     float row_rate = 0.0f;
-    for (int i = 0; i < phi->nx; ++i)
+    for (int i = 0; i < len; ++i)
       row_rate = lsm_maxf(row_rate, lsm_cfl_rate_at(p, t, row + i, s, inv_dx, inv_dy, roefix));
     rate = lsm_maxf(rate, row_rate);
   }
   return rate;
+}
+
+float lsm_cfl_max_rate(const lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme,
+                       int threads) {
+  return lsm_cfl_max_rate_on(phi, phi_target, scheme, NULL, threads);
 }
 
 double lsm_cfl_step(double cfl, float rate) { return rate > 0.0f ? cfl / (double)rate : INFINITY; }
@@ -53,19 +59,21 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, do
 #define LSM_HOT_CLONES
 #endif
 
-/* A sweep of one stage over the interior, the cell's value from `cell`
- * (kernels/lsm_stencil.h); rows in parallel. */
+/* A sweep of one stage over the cells of runs (NULL: the interior), the cell's value from
+ * `cell` (kernels/lsm_stencil.h); runs (rows) in parallel. */
 #define LSM_STAGE_SWEEP(name, cell)                                                          \
   static void name(lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,                   \
-                   const lsm_grid *phi_target, float c0, float c1, float dt, int threads) { \
+                   const lsm_grid *phi_target, float c0, float c1, float dt,                \
+                   const lsm_runs *runs, int threads) {                                     \
     const float inv_dx = 1.0f / in->dx, inv_dy = 1.0f / in->dy;                              \
-    const ptrdiff_t s = in->stride;                                                          \
+    const ptrdiff_t s = in->stride, n = lsm_runs_count(in, runs);                                 \
     const float *u = u0->data, *p = in->data, *t = phi_target->data;                         \
     float *o = out->data;                                                                    \
-    _Pragma("omp parallel for num_threads(lsm_grid_threads(in, threads)) schedule(static)") \
-    for (int j = 0; j < in->ny; ++j) {                                                       \
-      const ptrdiff_t row = (ptrdiff_t)j * s;                                                \
-      for (int i = 0; i < in->nx; ++i)                                                       \
+    _Pragma("omp parallel for num_threads(lsm_runs_threads(in, runs, threads)) schedule(static)") \
+    for (ptrdiff_t q = 0; q < n; ++q) {                                                      \
+      const ptrdiff_t row = lsm_runs_start(in, runs, q);                                          \
+      const int len = lsm_runs_length(in, runs, q);                                               \
+      for (int i = 0; i < len; ++i)                                                          \
         o[row + i] = cell(u, p, t, row + i, s, inv_dx, inv_dy, c0, c1, dt);                  \
     }                                                                                        \
   }
@@ -74,20 +82,26 @@ LSM_HOT_CLONES LSM_STAGE_SWEEP(stage_upwind, lsm_stage_upwind_at)
 LSM_STAGE_SWEEP(stage_roefix, lsm_stage_roefix_at)
 LSM_HOT_CLONES LSM_STAGE_SWEEP(stage_weno5, lsm_stage_weno5_at)
 
+void lsm_scheme_stage_on(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
+                         const lsm_grid *phi_target, float c0, float c1, float dt,
+                         const lsm_runs *runs, int threads) {
+  switch (scheme) {
+  case LSM_SCHEME_ROEFIX:
+    stage_roefix(out, u0, in, phi_target, c0, c1, dt, runs, threads);
+    break;
+  case LSM_SCHEME_WENO5:
+    stage_weno5(out, u0, in, phi_target, c0, c1, dt, runs, threads);
+    break;
+  default:
+    stage_upwind(out, u0, in, phi_target, c0, c1, dt, runs, threads);
+    break;
+  }
+}
+
 void lsm_scheme_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
                       const lsm_grid *phi_target, float c0, float c1, float dt, int threads) {
   lsm_grid_fill_ghosts(in);
-  switch (scheme) {
-  case LSM_SCHEME_ROEFIX:
-    stage_roefix(out, u0, in, phi_target, c0, c1, dt, threads);
-    break;
-  case LSM_SCHEME_WENO5:
-    stage_weno5(out, u0, in, phi_target, c0, c1, dt, threads);
-    break;
-  default:
-    stage_upwind(out, u0, in, phi_target, c0, c1, dt, threads);
-    break;
-  }
+  lsm_scheme_stage_on(scheme, out, u0, in, phi_target, c0, c1, dt, NULL, threads);
 }
 
 /* ---- norms -------------------------------------------------------------------------- */
@@ -111,18 +125,28 @@ static double row_sq_diff(const float *restrict pa, const float *restrict pb, in
   return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
 }
 
-double lsm_grid_diff_norm(const lsm_grid *a, const lsm_grid *b, int threads) {
-  double *rows = malloc((size_t)a->ny * sizeof *rows);
+double lsm_grid_diff_norm_on(const lsm_grid *a, const lsm_grid *b, const lsm_runs *runs,
+                             int threads) {
+  const ptrdiff_t n = lsm_runs_count(a, runs);
+  double *rows = malloc((size_t)(n > 0 ? n : 1) * sizeof *rows);
   double total = 0.0;
   if (rows) {
-#pragma omp parallel for num_threads(lsm_grid_threads(a, threads)) schedule(static)
-    for (int j = 0; j < a->ny; ++j) rows[j] = row_sq_diff(&LSM_AT(a, 0, j), &LSM_AT(b, 0, j), a->nx);
-    for (int j = 0; j < a->ny; ++j) total += rows[j];
+#pragma omp parallel for num_threads(lsm_runs_threads(a, runs, threads)) schedule(static)
+    for (ptrdiff_t q = 0; q < n; ++q)
+      rows[q] = row_sq_diff(a->data + lsm_runs_start(a, runs, q), b->data + lsm_runs_start(a, runs, q),
+                            lsm_runs_length(a, runs, q));
+    for (ptrdiff_t q = 0; q < n; ++q) total += rows[q];
     free(rows);
   } else {
-    for (int j = 0; j < a->ny; ++j) total += row_sq_diff(&LSM_AT(a, 0, j), &LSM_AT(b, 0, j), a->nx);
+    for (ptrdiff_t q = 0; q < n; ++q)
+      total += row_sq_diff(a->data + lsm_runs_start(a, runs, q), b->data + lsm_runs_start(a, runs, q),
+                           lsm_runs_length(a, runs, q));
   }
   return sqrt(total);
+}
+
+double lsm_grid_diff_norm(const lsm_grid *a, const lsm_grid *b, int threads) {
+  return lsm_grid_diff_norm_on(a, b, NULL, threads);
 }
 
 int lsm_grid_all_finite(const lsm_grid *g, int threads) {

@@ -11,6 +11,8 @@
 #ifndef LSM_SCHEME_H
 #define LSM_SCHEME_H
 
+#include <stdint.h>
+
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_names.h"
 #include "solver/base/lsm_status.h"
@@ -33,6 +35,30 @@ LSM_ENUM(lsm_time, LSM_TIME, LSM_TIME_LIST, lsm_time_name,
 /* Number of Hamiltonian evaluations per cell and step (1, 2, 3). */
 int lsm_time_stages(lsm_time time);
 
+/* A set of cells as runs along rows: run q is the `length[q]` cells from offset `start[q]`
+ * (from cell (0, 0); j stride + i), `cells` in all: the narrow band (lsm_band).  The sweeps
+ * below take one, or NULL for every interior cell. */
+typedef struct lsm_runs {
+  const int32_t *start, *length;
+  size_t n, cells;
+} lsm_runs;
+
+/* Run q of a sweep over runs (NULL: row q of g's interior): its count, first cell, length;
+ * and the threads worth using (lsm_grid_threads by the cells swept). */
+static inline ptrdiff_t lsm_runs_count(const lsm_grid *g, const lsm_runs *runs) {
+  return runs ? (ptrdiff_t)runs->n : (ptrdiff_t)g->ny;
+}
+static inline ptrdiff_t lsm_runs_start(const lsm_grid *g, const lsm_runs *runs, ptrdiff_t q) {
+  return runs ? (ptrdiff_t)runs->start[q] : q * g->stride;
+}
+static inline int lsm_runs_length(const lsm_grid *g, const lsm_runs *runs, ptrdiff_t q) {
+  return runs ? (int)runs->length[q] : g->nx;
+}
+static inline int lsm_runs_threads(const lsm_grid *g, const lsm_runs *runs, int threads) {
+  if (!runs) return lsm_grid_threads(g, threads);
+  return runs->cells < 65536u || threads < 1 ? 1 : threads;
+}
+
 /* The CFL step (solver/README.md §4; kernels/lsm_cell.h, lsm_cfl_rate_of): the largest rate
  * of the scheme over the cells of phi (ghosts filled): upwind, |H1|/dx + |H2|/dy on the four
  * one-sided gradient combinations; Roe-Fix, |F| (1/dx + 1/dy), which bounds its
@@ -40,6 +66,8 @@ int lsm_time_stages(lsm_time time);
  * (upwind, Roe-Fix; WENO5 is not monotone); +INFINITY for a rate of 0 (phi == phi_target). */
 float lsm_cfl_max_rate(const lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme,
                        int threads);
+float lsm_cfl_max_rate_on(const lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme,
+                          const lsm_runs *runs, int threads);
 double lsm_cfl_step(double cfl, float rate);
 /* Both on phi after filling its ghosts. */
 void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, double cfl,
@@ -49,11 +77,18 @@ void lsm_cfl_dt(lsm_grid *phi, const lsm_grid *phi_target, lsm_scheme scheme, do
  * out may alias u0 (cell-wise), never in.  Fills in's ghosts. */
 void lsm_scheme_stage(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, lsm_grid *in,
                       const lsm_grid *phi_target, float c0, float c1, float dt, int threads);
+/* The same on the cells of runs (NULL: every cell); in's ghosts as they are. */
+void lsm_scheme_stage_on(lsm_scheme scheme, lsm_grid *out, const lsm_grid *u0, const lsm_grid *in,
+                         const lsm_grid *phi_target, float c0, float c1, float dt,
+                         const lsm_runs *runs, int threads);
 
 /* ||a - b||_2 over the interior (Frobenius norm, physical units), summed in
  * double row by row and then in row order, so the value does not depend on
  * the thread count. */
 double lsm_grid_diff_norm(const lsm_grid *a, const lsm_grid *b, int threads);
+/* The same over the cells of runs (NULL: the interior), summed run by run in run order. */
+double lsm_grid_diff_norm_on(const lsm_grid *a, const lsm_grid *b, const lsm_runs *runs,
+                             int threads);
 
 /* 1 if every interior value is finite. */
 int lsm_grid_all_finite(const lsm_grid *g, int threads);

@@ -216,6 +216,7 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
   }
   lsm_park_close(&park);
   ps->seconds = solver;
+  if (m) ps->cell_updates = lsm_morph_cell_updates(m); /* the emitting pass, as iterations */
   lsm_pair_stats_add_pls(ps, m);
   lsm_morph_destroy(&m);
   lsm_gap_free(&g);

@@ -102,6 +102,8 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
   lsm_run r = {.src = src, .opts = opts, .sink = sink, .progress = progress, .width = width,
                .height = height, .morph = opts->morph};
   r.morph.track_cp = opts->per_iteration; /* default mode: CP of each snapshot's last step */
+  /* per-iteration mode's slices are the full grid's iterations, at its step (§12) */
+  r.morph.band = opts->morph.band && !opts->per_iteration;
   r.morph.particles = opts->method == LSM_METHOD_PLS;
   r.out = lsm_alloc((size_t)width * (size_t)height, sizeof(float), err, "output slice");
   if (!r.out) return err ? err->status : LSM_ERR_NOMEM;

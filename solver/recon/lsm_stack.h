@@ -162,7 +162,8 @@ typedef struct lsm_pair_stats {
   double cp;              /* CP of the last step (0 if no step) */
   double t_final;         /* morph time reached */
   double seconds;         /* solver time for the pair */
-  long long cells;        /* grid cells updated per iteration */
+  long long cells;        /* grid cells (updated per iteration with --band off) */
+  long long cell_updates; /* cells updated by the solver's stages, both morphs */
   size_t slices;          /* intermediate slices emitted */
   int hit_max_iter;       /* 1 if max_iter stopped the pair early */
   int aligned;            /* 1 if the pair was hull-aligned (--align hull, or chosen by auto),

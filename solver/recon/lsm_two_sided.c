@@ -130,6 +130,7 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
   lsm_pair_stats_add_pls(ps, rev);
   if (fwd && rev) {
     ps->iterations = lsm_morph_iterations(fwd) + lsm_morph_iterations(rev);
+    ps->cell_updates = lsm_morph_cell_updates(fwd) + lsm_morph_cell_updates(rev);
     ps->dt = lsm_morph_dt(fwd);
     ps->cp = lsm_morph_iterations(fwd) ? lsm_morph_cp(fwd) : 0.0;
     ps->t_final = lsm_morph_time(fwd);
