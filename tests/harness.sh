@@ -2,8 +2,8 @@
 # is set.  Counters, ok/bad/check, finish (prints "SUITE: N passed, N failed"
 # and exits 0 only when nothing failed), need (programs that must exist),
 # need_python (modules Debian's Python must import), run_checks (a helper
-# printing "ok - " / "FAIL - " lines, counted) and make_tmp (a temporary folder
-# $TMP removed on exit).
+# printing "ok - " / "FAIL - " lines, counted), make_tmp (a temporary folder
+# $TMP removed on exit) and work_in_tmp (make_tmp, then cd into it).
 
 pass=0
 fail=0
@@ -29,6 +29,12 @@ make_tmp() { # sets TMP to a new folder, removed on exit (a suite may replace th
   TMP=$(mktemp -d "${TMPDIR:-/tmp}/lsm-$SUITE.XXXXXX") || exit 1
   trap 'rm -rf "$TMP"' EXIT
   trap 'exit 1' INT TERM
+}
+work_in_tmp() { # make_tmp, then work in $TMP: LSM an absolute path, TESTS the tests folder
+  TESTS=$(cd "$(dirname "$0")" && pwd)
+  make_tmp
+  cd "$TMP" || exit 1
+  case $LSM in /*) ;; *) LSM="$OLDPWD/$LSM" ;; esac
 }
 need_python() { # need_python MODULES PACKAGES: ends the suite when $PY cannot import them
   "$PY" -c "import $1" 2>/dev/null || { bad "$PY cannot import $1 (Debian packages $2)"; finish; }
