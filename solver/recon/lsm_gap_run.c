@@ -59,6 +59,10 @@ static lsm_status run_gap_cap(lsm_run *r, const lsm_window *w, lsm_gap *g, int a
                         fabs(w->z_farther - w->z[kn]), g->f.H, profile, &o->rules, &end, err);
   lsm_grid_destroy(&beyond);
   lsm_grid_destroy(&farther);
+  /* the linear profiles' R: F's depth on its own image, not the canvas margin */
+  if (st == LSM_OK && !lsm_end_profile_is_trend(profile))
+    lsm_end_set_depth(end, lsm_end_depth_in(full, g->f.pad - g->f.dx[kf], g->f.pad_y - g->f.dy[kf],
+                                            g->f.width, g->f.height));
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
     lsm_end_at(end, a_empty ? 1.0 - fs[k] : fs[k], work);
     lsm_frame_extract(&g->f, work, fs[k], r->out);
@@ -83,7 +87,8 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
     free(fill.cls);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  if (lsm_rule_on(&r->opts->rules, LSM_RULE_PINHOLE_FILL) &&
+  /* (not for blend: it stays the textbook, holes and all) */
+  if (lsm_rule_on(&r->opts->rules, LSM_RULE_PINHOLE_FILL) && r->opts->method != LSM_METHOD_BLEND &&
       !lsm_mask_has_hole(&a->filled, fill.cls, fill.queue) &&
       !lsm_mask_has_hole(&b->filled, fill.cls, fill.queue))
     r->fill = &fill;

@@ -144,8 +144,8 @@
     "a drifting hole fits neither join: it is shut or split; the blend moves it",                 \
     "the two-sided value")                                                                        \
   X(PINHOLE_FILL, "pinhole-fill",                                                                 \
-    "between two slices without holes, an output hole of at most pinhole_fill_cells cells, each " \
-    "within pinhole_fill_thin_px of the inside and inside one slice, is filled",                  \
+    "ls/pls, between two slices without holes: an output hole of at most pinhole_fill_cells "      \
+    "cells, each within pinhole_fill_thin_px of the inside and inside one slice, is filled",       \
     "the morph leaves such holes where two parts merge (a ridge of phi)",                         \
     "the holes are kept")                                                                         \
   /* where objects end (lsm_ends, lsm_gap_run) */                                                 \
