@@ -3,7 +3,8 @@
 # and exits 0 only when nothing failed), need (programs that must exist),
 # need_python (modules Debian's Python must import), run_checks (a helper
 # printing "ok - " / "FAIL - " lines, counted), make_tmp (a temporary folder
-# $TMP removed on exit) and work_in_tmp (make_tmp, then cd into it).
+# $TMP removed on exit), work_in_tmp (make_tmp, then cd into it) and
+# lib_python (how to run Python over liblsmorph.so).
 
 pass=0
 fail=0
@@ -54,5 +55,20 @@ run_checks() { # run_checks LOG COMMAND...: runs a checker whose lines are "ok -
   if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then
     bad "$1 exited with $rc:"
     tail -5 "$log"
+  fi
+}
+lib_python() { # lib_python LIBRARY: after make_tmp, sets PYLIB (run it for $PY) and
+  # SANFLAGS (for cc).  Under SANITIZE=1 the library carries ASan, whose runtime must
+  # come first in a program that loads it: PYLIB is then $PY with it preloaded (the
+  # interpreter's own allocations at exit are not the library's leaks) and SANFLAGS
+  # links it into a C program.
+  PYLIB=$PY
+  SANFLAGS=
+  if ldd "$1" 2>/dev/null | grep -q libasan; then
+    PYLIB="$TMP/python"
+    printf '#!/bin/sh\nLD_PRELOAD=%s ASAN_OPTIONS=detect_leaks=0 exec %s "$@"\n' \
+      "$(cc -print-file-name=libasan.so)" "$PY" >"$PYLIB"
+    chmod +x "$PYLIB"
+    SANFLAGS="-fsanitize=address,undefined"
   fi
 }

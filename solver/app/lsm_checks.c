@@ -150,16 +150,17 @@ lsm_status lsm_check_inputs(const lsm_cli *cli, const lsm_slice_files *src, cons
 /* ---- memory and disk, before any work -------------------------------------------------- */
 
 /* The model of a run's peak memory, in bytes (measured peaks of two-sided
- * gaps at 512^2 to 2048^2, one and two threads, one and six slices:
+ * gaps at 512^2 to 4096^2, one and two threads, one and six slices:
  * validation/measurements/limits.md).  A gap in flight works on a canvas of
  * (W + 4) x (H + 4) cells where its pair is not aligned (more where it is):
- * about 32 floats a cell for both morphs, the signed distances and slopes of
- * its four slices, the combined field and the distance transforms' scratch;
- * the particles of pls add 12 more.  The mesh keeps its slab of slices and
+ * about 40 floats a cell for both morphs and their narrow bands, the signed
+ * distances and slopes of its four slices, the combined field and the
+ * distance transforms' scratch (measured: 123 to 148 bytes); the particles
+ * of pls add 12 more.  The mesh keeps its slab of slices and
  * vertex maps (about 24 floats a pixel); the slice writer queues at most
  * 64 MiB of slices. */
 #define LSM_MEM_BASE (16.0 * 1048576.0)
-#define LSM_MEM_GAP_PER_CELL 128.0
+#define LSM_MEM_GAP_PER_CELL 160.0
 #define LSM_MEM_PLS_PER_CELL 48.0
 #define LSM_MEM_MESH_PER_PIXEL 96.0
 #define LSM_MEM_WRITER_QUEUE (64.0 * 1048576.0)
