@@ -37,6 +37,7 @@ struct lsm_band {
   const float *target;        /* borrowed: the caller's phi_target */
   lsm_grid *amplitude;        /* phi = target + amplitude g outside the band */
   uint64_t *band, *next, *kept, *rim, *row_tmp; /* bitmaps (ny words rows), a row */
+  uint64_t *facing; /* cells kept from the start: the slices' fronts face each other */
   vec heap;                   /* heap_entry: max-heap on g */
   vec run_start, run_length, rim_cells, rim_amplitude, enter, enter_value;
   size_t cells;
@@ -80,6 +81,40 @@ static double enter_g(float target, float amplitude, float level, double g_now) 
   if (amplitude > 0.0f && target <= level) g = ((double)level - target) / amplitude;
   if (amplitude < 0.0f && target >= -level) g = ((double)level + target) / -amplitude;
   return g < g_now ? g : -1.0;
+}
+
+/* The g below g_now at which cell k's value t + a g becomes an extremum of its 4-neighbours'
+ * that the morph holds: a minimum where phi falls towards the target (a > 0), a maximum where
+ * it rises (a < 0).  The upwind Hamiltonian is 0 there (the viscosity solution keeps such an
+ * extremum), so from then on the cell no longer follows t + a g: it must be in the band.  Each
+ * neighbour n bounds g by the sign of (t_n - t_k) + g (a_n - a_k); -1: never, or already (the
+ * kept levels decide then). */
+static double extremum_g(const float *t, const float *a, ptrdiff_t k, ptrdiff_t s, int i, int j,
+                         int nx, int ny, double g_now) {
+  if (a[k] == 0.0f) return -1.0;
+  const double sign = a[k] > 0.0f ? 1.0 : -1.0;
+  const ptrdiff_t nb[4] = {k - 1, k + 1, k - s, k + s};
+  const int inside[4] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny};
+  double lo = 0.0, hi = INFINITY;
+  for (int q = 0; q < 4; ++q) {
+    if (!inside[q]) continue; /* the ghost repeats the cell: no bound */
+    const double p = sign * ((double)t[nb[q]] - t[k]), r = sign * ((double)a[nb[q]] - a[k]);
+    if (r > 0.0)
+      lo = fmax(lo, -p / r);
+    else if (r < 0.0)
+      hi = fmin(hi, p / -r);
+    else if (p < 0.0)
+      return -1.0;
+  }
+  return hi >= lo && hi > 0.0 && hi < g_now ? hi : -1.0;
+}
+
+/* The g at which cell k (column i, row j) enters the band by itself: the larger of the two
+ * above; -1 never. */
+static double wait_g(const lsm_band *b, ptrdiff_t k, int i, int j, double g_now) {
+  const float *a = b->amplitude->data;
+  return fmax(enter_g(b->target[k], a[k], b->p.level, g_now),
+              extremum_g(b->target, a, k, b->stride, i, j, b->nx, b->ny, g_now));
 }
 
 static int heap_push(vec *h, heap_entry x) {
@@ -222,7 +257,7 @@ static lsm_status build(lsm_band *b, const float *phi, float g, lsm_err *err) {
       for (; phi && out; out &= out - 1) {
         const ptrdiff_t k = (ptrdiff_t)j * s + 64 * q + __builtin_ctzll(out);
         a[k] = (float)(((double)phi[k] - (double)b->target[k]) / (double)g);
-        const double ge = enter_g(b->target[k], a[k], b->p.level, g);
+        const double ge = wait_g(b, k, 64 * q + __builtin_ctzll(out), j, g);
         if (ge > 0.0 && !heap_push(&b->heap, (heap_entry){ge, a[k], (int32_t)k}))
           return NOMEM(err);
       }
@@ -278,12 +313,27 @@ static lsm_status build(lsm_band *b, const float *phi, float g, lsm_err *err) {
   return LSM_OK;
 }
 
-/* A kept level: |v| <= level, or a sign change against a 4-neighbour (the front).  phi holds
- * values at the cell and its 4-neighbours (the band's, its rim's and ghosts'). */
-static inline int kept(const float *p, ptrdiff_t k, ptrdiff_t s, float level) {
-  const float v = p[k];
-  return fabsf(v) <= level || lsm_opposite(v, p[k - 1]) || lsm_opposite(v, p[k + 1]) ||
-         lsm_opposite(v, p[k - s]) || lsm_opposite(v, p[k + s]);
+/* Whether the gradients of the two slices' distances (central differences) are more than 90
+ * degrees apart at interior cell k: the slices' fronts face each other there, and the blend's
+ * gradient |(1 - s) grad a + s grad b| falls below cos 45 degrees on the way. */
+static int facing(const float *a, const float *b, ptrdiff_t k, ptrdiff_t s) {
+  const float ax = a[k + 1] - a[k - 1], ay = a[k + s] - a[k - s];
+  const float bx = b[k + 1] - b[k - 1], by = b[k + s] - b[k - s];
+  return ax * bx + ay * by < 0.0f;
+}
+
+/* A kept level: |v| <= level, a sign change against a 4-neighbour (the front), or an extremum
+ * the morph holds.  phi holds values at the cell and its 4-neighbours (the band's, its rim's
+ * and ghosts'). */
+static inline int kept(const float *p, const float *t, ptrdiff_t k, ptrdiff_t s, float level) {
+  const float v = p[k], l = p[k - 1], r = p[k + 1], d = p[k - s], u = p[k + s];
+  if (fabsf(v) <= level || lsm_opposite(v, l) || lsm_opposite(v, r) || lsm_opposite(v, d) ||
+      lsm_opposite(v, u))
+    return 1;
+  /* an extremum the morph holds (extremum_g) */
+  const float F = v - t[k];
+  return (F > 0.0f && v <= l && v <= r && v <= d && v <= u) ||
+         (F < 0.0f && v >= l && v >= r && v >= d && v >= u);
 }
 
 lsm_status lsm_band_create(const lsm_grid *phi_source, const lsm_grid *phi_target,
@@ -332,18 +382,33 @@ lsm_status lsm_band_create(const lsm_grid *phi_source, const lsm_grid *phi_targe
     for (int i = 0; i < nx; ++i) {
       const ptrdiff_t k = (ptrdiff_t)j * s + i;
       amp[k] = src[k] - b->target[k];
-      if (kept(src, k, s, params->level))
+      if (kept(src, b->target, k, s, params->level))
         row_bits(b, b->kept, j)[i >> 6] |= (uint64_t)1 << (i & 63);
-      else
-        waiting += enter_g(b->target[k], amp[k], params->level, 1.0) > 0.0;
     }
+  /* where the two slices' fronts face each other and the value will come near zero, the
+   * morph departs from t + a g at once (a split, a merge, a hole, a part appearing): those
+   * cells are kept from the start */
+  if (st == LSM_OK && !(b->facing = calloc(words, sizeof(uint64_t))))
+    st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a narrow band");
+  for (int j = 1; st == LSM_OK && j + 1 < ny; ++j)
+    for (int i = 1; i + 1 < nx; ++i) {
+      const ptrdiff_t k = (ptrdiff_t)j * s + i;
+      if (facing(src, b->target, k, s) && enter_g(b->target[k], amp[k], params->level, 1.0) > 0.0) {
+        row_bits(b, b->facing, j)[i >> 6] |= (uint64_t)1 << (i & 63);
+        row_bits(b, b->kept, j)[i >> 6] |= (uint64_t)1 << (i & 63);
+      }
+    }
+  for (int j = 0; st == LSM_OK && j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      waiting += !((row_bits(b, b->kept, j)[i >> 6] >> (i & 63)) & 1u) &&
+                 wait_g(b, (ptrdiff_t)j * s + i, i, j, 1.0) > 0.0;
   if (st == LSM_OK && !vec_reserve(&b->heap, waiting)) st = NOMEM(err);
   heap_entry *e = b->heap.data;
   for (int j = 0; st == LSM_OK && j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       if ((row_bits(b, b->kept, j)[i >> 6] >> (i & 63)) & 1u) continue;
       const ptrdiff_t k = (ptrdiff_t)j * s + i;
-      const double ge = enter_g(b->target[k], amp[k], params->level, 1.0);
+      const double ge = wait_g(b, k, i, j, 1.0);
       if (ge > 0.0) e[b->heap.n++] = (heap_entry){ge, amp[k], (int32_t)k};
     }
   for (size_t k = b->heap.n / 2; st == LSM_OK && k-- > 0;) heap_sift(e, b->heap.n, k, e[k]);
@@ -368,6 +433,7 @@ void lsm_band_destroy(lsm_band **band) {
   free(b->kept);
   free(b->rim);
   free(b->row_tmp);
+  free(b->facing);
   vec *v[] = {&b->heap, &b->run_start, &b->run_length, &b->rim_cells, &b->rim_amplitude,
               &b->enter, &b->enter_value};
   for (size_t q = 0; q < sizeof v / sizeof v[0]; ++q) vec_free(v[q]);
@@ -379,7 +445,7 @@ lsm_status lsm_band_rebuild(lsm_band *b, const lsm_grid *phi, double g, lsm_err 
   const float level = b->p.level;
   const float *p = phi->data, *a = b->amplitude->data;
   const ptrdiff_t s = b->stride;
-  memset(b->kept, 0, (size_t)b->ny * (size_t)b->words * sizeof *b->kept);
+  memcpy(b->kept, b->facing, (size_t)b->ny * (size_t)b->words * sizeof *b->kept);
   float speed = 0.0f;
   /* the kept levels lie in the old band (a level moves at most `travel` cells between
    * rebuilds) ... */
@@ -393,7 +459,7 @@ lsm_status lsm_band_rebuild(lsm_band *b, const lsm_grid *phi, double g, lsm_err 
     for (int i = i0; i < i0 + rl[r]; ++i) {
       const ptrdiff_t k = (ptrdiff_t)j * s + i;
       speed = lsm_maxf(speed, fabsf(p[k] - b->target[k]));
-      if (kept(p, k, s, level)) row[i >> 6] |= (uint64_t)1 << (i & 63);
+      if (kept(p, b->target, k, s, level)) row[i >> 6] |= (uint64_t)1 << (i & 63);
     }
   }
   /* ... or where a value outside it has come near zero (a front may appear there) */
