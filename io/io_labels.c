@@ -97,6 +97,8 @@ lsm_voxels *lsm_labels_voxels(lsm_label_file *f) { return &f->vox; }
 lsm_label_format lsm_labels_format(const lsm_label_file *f) { return f->format; }
 const char *lsm_labels_path(const lsm_label_file *f) { return f->path; }
 
+int lsm_labels_compressed(const lsm_label_file *f) { return f->compressed; }
+
 void lsm_labels_affine(const lsm_label_file *f, double m[3][4]) {
   memcpy(m, f->affine, sizeof f->affine);
 }

@@ -59,6 +59,9 @@ void lsm_labels_free(lsm_label_file **f);
 lsm_voxels *lsm_labels_voxels(lsm_label_file *f);
 lsm_label_format lsm_labels_format(const lsm_label_file *f);
 const char *lsm_labels_path(const lsm_label_file *f);
+/* Whether its samples were compressed (NRRD writes them back so; NIfTI by the
+ * output's name, .nii.gz). */
+int lsm_labels_compressed(const lsm_label_file *f);
 
 /* Index to world: x = m[.][0] i + m[.][1] j + m[.][2] k + m[.][3], in LPS
  * (3D Slicer's and ITK's world: x to the left, y to the back), physical units

@@ -69,18 +69,23 @@ static void machine_id(char out[17]) {
   snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
 
+/* Whether /proc shows this pid namespace's processes: its "self" is getpid(). */
+static int proc_is_ours(void) {
+  char self[32];
+  const ssize_t n = readlink("/proc/self", self, sizeof self - 1);
+  if (n <= 0) return 0;
+  self[n] = '\0';
+  return strtol(self, NULL, 10) == (long)getpid();
+}
+
 void lsm_temp_tag(char tag[LSM_TEMP_TAG_MAX]) {
   tag[0] = '\0';
-  char machine[17], self[32];
+  char machine[17];
   machine_id(machine);
-  /* /proc must be this pid namespace's: its "self" is getpid() */
-  const ssize_t n = readlink("/proc/self", self, sizeof self - 1);
-  if (!machine[0] || n <= 0) return;
-  self[n] = '\0';
   const long pid = (long)getpid();
   char state = 0;
   unsigned long long start = 0;
-  if (strtol(self, NULL, 10) != pid || process_start(pid, &state, &start) != 1) return;
+  if (!machine[0] || !proc_is_ours() || process_start(pid, &state, &start) != 1) return;
   snprintf(tag, LSM_TEMP_TAG_MAX, "%ld.%llu.%s", pid, start, machine);
 }
 
@@ -135,6 +140,7 @@ int lsm_temp_owner_ended(const char *tag) {
   if (!parse_tag(tag, &pid, &start, machine)) return 0;
   machine_id(mine);
   if (!mine[0] || strcmp(machine, mine) != 0) return 0; /* another kernel or pid namespace */
+  if (!proc_is_ours()) return 0; /* a /proc of another namespace: its pids are not these */
   if (pid == (long)getpid()) return 0;
   const int found = process_start(pid, &state, &now_start);
   if (found == 0) return 1;  /* no such process */

@@ -2,8 +2,9 @@
 # is set.  Counters, ok/bad/check, finish (prints "SUITE: N passed, N failed"
 # and exits 0 only when nothing failed), need (programs that must exist),
 # need_python (modules Debian's Python must import), run_checks (a helper
-# printing "ok - " / "FAIL - " lines, counted) and make_tmp (a temporary folder
-# $TMP removed on exit).
+# printing "ok - " / "FAIL - " lines, counted), make_tmp (a temporary folder
+# $TMP removed on exit), work_in_tmp (make_tmp, then cd into it) and
+# lib_python (how to run Python over liblsmorph.so).
 
 pass=0
 fail=0
@@ -30,6 +31,12 @@ make_tmp() { # sets TMP to a new folder, removed on exit (a suite may replace th
   trap 'rm -rf "$TMP"' EXIT
   trap 'exit 1' INT TERM
 }
+work_in_tmp() { # make_tmp, then work in $TMP: LSM an absolute path, TESTS the tests folder
+  TESTS=$(cd "$(dirname "$0")" && pwd)
+  make_tmp
+  cd "$TMP" || exit 1
+  case $LSM in /*) ;; *) LSM="$OLDPWD/$LSM" ;; esac
+}
 need_python() { # need_python MODULES PACKAGES: ends the suite when $PY cannot import them
   "$PY" -c "import $1" 2>/dev/null || { bad "$PY cannot import $1 (Debian packages $2)"; finish; }
 }
@@ -48,5 +55,20 @@ run_checks() { # run_checks LOG COMMAND...: runs a checker whose lines are "ok -
   if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then
     bad "$1 exited with $rc:"
     tail -5 "$log"
+  fi
+}
+lib_python() { # lib_python LIBRARY: after make_tmp, sets PYLIB (run it for $PY) and
+  # SANFLAGS (for cc).  Under SANITIZE=1 the library carries ASan, whose runtime must
+  # come first in a program that loads it: PYLIB is then $PY with it preloaded (the
+  # interpreter's own allocations at exit are not the library's leaks) and SANFLAGS
+  # links it into a C program.
+  PYLIB=$PY
+  SANFLAGS=
+  if ldd "$1" 2>/dev/null | grep -q libasan; then
+    PYLIB="$TMP/python"
+    printf '#!/bin/sh\nLD_PRELOAD=%s ASAN_OPTIONS=detect_leaks=0 exec %s "$@"\n' \
+      "$(cc -print-file-name=libasan.so)" "$PY" >"$PYLIB"
+    chmod +x "$PYLIB"
+    SANFLAGS="-fsanitize=address,undefined"
   fi
 }

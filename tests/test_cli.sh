@@ -44,7 +44,7 @@ done
 n=$(lines "$TMP/help")
 check "help reconstruct has $n lines, more than 90" [ "$n" -le 90 ]
 for opt in -o --output --input --invert --spacing --heights --heights-from-names --pixel-size \
-    --max-pixels --max-voxels --dz --per-iteration --format --values --nrrd-encoding --mesh \
+    --max-pixels --max-voxels --max-memory --dz --per-iteration --format --values --nrrd-encoding --mesh \
     --no-slices --no-preview --method --interp --ends --align --scheme --time --cfl --max-iter \
     --reinit-every --reinit-iters --tol --particles-per-cell --pls-reseed --pls-radius-adjust \
     --seed --rules-off --threads --backend --device -q --quiet; do

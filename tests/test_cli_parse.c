@@ -22,8 +22,9 @@ static void test_reconstruct_defaults(void **state) {
   assert_string_equal(cli.backend, "c");
   assert_true(cli.spacing == 1.0);
   assert_int_equal(cli.threads, 0);
-  assert_true(cli.max_pixels == (uint64_t)1 << 28);
-  assert_true(cli.max_voxels == (uint64_t)1 << 34);
+  assert_true(cli.max_pixels == (uint64_t)1 << 26);
+  assert_true(cli.max_voxels == (uint64_t)1 << 30);
+  assert_true(cli.max_memory == 0);
   assert_int_equal(cli.stack.max_iter, 100000);
   assert_true(cli.stack.morph.cfl == 0.75);
   assert_true(cli.stack.tol == 0.25);

@@ -22,10 +22,7 @@ SUITE=out-dir
 . "$(dirname "$0")/harness.sh"
 need "$LSM"
 command -v "$PY" >/dev/null 2>&1 || PY=python3
-make_tmp
-cd "$TMP" || exit 1
-case $LSM in /*) ;; *) LSM="$OLDPWD/$LSM" ;; esac
-TESTS=$OLDPWD/tests
+work_in_tmp
 
 "$PY" "$TESTS/make_stack.py" good 3 32 >/dev/null 2>&1 || { bad "make_stack.py good"; finish; }
 # fingerprint DIR: a checksum of every file under DIR (to see it unchanged).

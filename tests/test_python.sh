@@ -19,6 +19,7 @@ HERE="$(cd "$(dirname "$0")" && pwd)"
 case $BUILD in /*) ;; *) BUILD="$PWD/$BUILD" ;; esac
 case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
 [ -f "$BUILD/python/lsmorph/__init__.py" ] || { bad "$BUILD/python/lsmorph is missing (make builds it)"; finish; }
+lib_python "$BUILD/liblsmorph.so"
 
 "$PY" "$HERE/fill_check.py" make "$TMP" >"$TMP/make.log" 2>&1 || { bad "making the volumes"; finish; }
 "$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/cli.nii.gz" -q &&
@@ -27,7 +28,7 @@ case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
   "$LSM" fill "$TMP/drawn.seg.nrrd" -o "$TMP/cli-seg.nrrd" -q
 check "the CLI's fills" [ $? -eq 0 ]
 
-run_checks "$TMP/log" env PYTHONPATH="$BUILD/python" "$PY" - "$TMP" "$LSM" <<'PYEOF'
+run_checks "$TMP/log" env PYTHONPATH="$BUILD/python" "$PYLIB" - "$TMP" "$LSM" <<'PYEOF'
 import os, subprocess, sys
 import numpy as np, nibabel as nib
 import lsmorph
@@ -123,9 +124,9 @@ open('$TMP/drawn.raw', 'wb').write(np.asarray(nib.load('$TMP/drawn.nii.gz').data
 open('$TMP/cli.raw', 'wb').write(np.asarray(nib.load('$TMP/cli.nii.gz').dataobj).astype(np.uint8).tobytes(order='F'))
 open('$TMP/spacing', 'w').write(' '.join(repr(float(z)) for z in nib.load('$TMP/drawn.nii.gz').header.get_zooms()[:3]))"
 PC="env PKG_CONFIG_PATH=$TMP/inst/lib/pkgconfig pkg-config"
-cc "$TMP/prog.c" -o "$TMP/prog-shared" $($PC --cflags --libs lsmorph) -Wl,-rpath,"$TMP/inst/lib" 2>"$TMP/e"
+cc $SANFLAGS "$TMP/prog.c" -o "$TMP/prog-shared" $($PC --cflags --libs lsmorph) -Wl,-rpath,"$TMP/inst/lib" 2>"$TMP/e"
 check "a C program built with pkg-config --libs lsmorph ($(tail -c 200 "$TMP/e"))" [ $? -eq 0 ]
-cc "$TMP/prog.c" -o "$TMP/prog-static" $($PC --cflags lsmorph) "$TMP/inst/lib/liblsmorph.a" $($PC --static --libs lsmorph | sed 's/-llsmorph//') 2>"$TMP/e"
+cc $SANFLAGS "$TMP/prog.c" -o "$TMP/prog-static" $($PC --cflags lsmorph) "$TMP/inst/lib/liblsmorph.a" $($PC --static --libs lsmorph | sed 's/-llsmorph//') 2>"$TMP/e"
 check "a C program built with the static library and pkg-config --static ($(tail -c 200 "$TMP/e"))" [ $? -eq 0 ]
 for kind in shared static; do
   "$TMP/prog-$kind" "$TMP/drawn.raw" "$TMP/$kind.raw" $(cat "$TMP/spacing") 2>"$TMP/e"
@@ -134,6 +135,6 @@ for kind in shared static; do
 done
 check "the shared program uses the installed liblsmorph.so.0" sh -c "ldd '$TMP/prog-shared' | grep -q '$TMP/inst/lib/liblsmorph.so.0'"
 SITE=$(ls -d "$TMP"/inst/lib/python3*/dist-packages)
-(cd "$TMP" && PYTHONPATH="$SITE" "$PY" -c "import lsmorph, sys; sys.exit(0 if lsmorph.__file__.startswith('$SITE') and lsmorph.version() else 1)") 2>"$TMP/e"
+(cd "$TMP" && PYTHONPATH="$SITE" "$PYLIB" -c "import lsmorph, sys; sys.exit(0 if lsmorph.__file__.startswith('$SITE') and lsmorph.version() else 1)") 2>"$TMP/e"
 check "the installed package imports and finds the installed library ($(tail -c 200 "$TMP/e"))" [ $? -eq 0 ]
 finish

@@ -18,6 +18,7 @@ HERE="$(cd "$(dirname "$0")" && pwd)"
 case $BUILD in /*) ;; *) BUILD="$PWD/$BUILD" ;; esac
 case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
 SCRIPT="$HERE/../examples/sparse_labels.py"
+lib_python "$BUILD/liblsmorph.so"
 "$PY" "$HERE/fill_check.py" make "$TMP" >"$TMP/make.log" 2>&1 || { bad "making the volumes"; finish; }
 
 # same CLI_ARGS -- SCRIPT_ARGS: the example's output against lsmorph fill's
@@ -27,7 +28,7 @@ same() {
   shift
   "$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/cli.nii.gz" -q $cli >"$TMP/o" 2>"$TMP/e"
   check "lsmorph fill$cli: exit 0" [ $? -eq 0 ]
-  PYTHONPATH="$BUILD/python" "$PY" "$SCRIPT" "$TMP/drawn.nii.gz" "$TMP/py.nii.gz" "$@" >"$TMP/o" 2>"$TMP/e"
+  PYTHONPATH="$BUILD/python" "$PYLIB" "$SCRIPT" "$TMP/drawn.nii.gz" "$TMP/py.nii.gz" "$@" >"$TMP/o" 2>"$TMP/e"
   check "sparse_labels.py $*: exit 0 ($(tail -c 200 "$TMP/e"))" [ $? -eq 0 ]
   "$PY" -c "
 import nibabel as nib, numpy as np, sys
@@ -40,9 +41,9 @@ same --
 same --labels 2,3 --method blend -- --labels 2,3 --method blend
 same --axis k --slices 0,4,8,12,16,20,24,28,32,36,40 -- --axis 2 --slices 0,4,8,12,16,20,24,28,32,36,40
 
-PYTHONPATH="$BUILD/python" "$PY" "$SCRIPT" "$TMP/drawn.nii.gz" "$TMP/no.nii.gz" --labels 9 >"$TMP/o" 2>"$TMP/e"
+PYTHONPATH="$BUILD/python" "$PYLIB" "$SCRIPT" "$TMP/drawn.nii.gz" "$TMP/no.nii.gz" --labels 9 >"$TMP/o" 2>"$TMP/e"
 check "a label that is not there: exit 1" [ $? -eq 1 ]
 check "a label that is not there: says so" grep -q "sparse_labels.py: error: .*--labels: 9 is not in the volume" "$TMP/e"
-PYTHONPATH="$BUILD/python" "$PY" "$SCRIPT" "$TMP/half.nii" "$TMP/no.nii.gz" >"$TMP/o" 2>"$TMP/e"
+PYTHONPATH="$BUILD/python" "$PYLIB" "$SCRIPT" "$TMP/half.nii" "$TMP/no.nii.gz" >"$TMP/o" 2>"$TMP/e"
 check "floats: exit 1 with a message" grep -q "labels must be integers" "$TMP/e"
 finish

@@ -5,6 +5,8 @@
  * disjoint slices, nested outline contours and the per-iteration mode. */
 #include "tests/lsm_test.h"
 
+#include <signal.h>
+
 #include "solver/base/lsm_grid.h"
 #include "solver/sdf/lsm_sdf.h"
 #include "solver/recon/lsm_stack.h"
@@ -1410,6 +1412,51 @@ static void test_per_iteration(void **state) {
 }
 
 /* ------------------------------------------------------------------------ */
+/* a stop signal where no solver step polls                                   */
+
+/* A sink that raises the stop flag at its second slice, as a signal would. */
+typedef struct stopping_sink {
+  sink_ctx inner;
+  volatile sig_atomic_t *stop;
+} stopping_sink;
+
+static lsm_status stopping_emit(void *ctx, const float *phi, int width, int height, double z,
+                                long input_index, lsm_err *err) {
+  stopping_sink *c = ctx;
+  if (c->inner.n == 1) *c->stop = SIGINT;
+  return sink_emit(&c->inner, phi, width, height, z, input_index, err);
+}
+
+/* Past --max-iter no solver step polls the stop flag: one long gap (199
+ * slices) at --max-iter 1 ran to its end after the signal (in issue 54, with
+ * four million slices, for minutes).  Every slice polls it now: the run stops
+ * after the slice during which it came, in either mode. */
+static void test_stop_past_max_iter(void **state) {
+  (void)state;
+  const slice_def defs[2] = {{1, {disc(C, C, 10)}}, {1, {disc(C, C, 20)}}};
+  const double z[2] = {0, 200};
+  for (int per_iteration = 0; per_iteration < 2; ++per_iteration) {
+    volatile sig_atomic_t stop = 0;
+    lsm_stack_opts o;
+    default_opts(&o);
+    o.max_iter = per_iteration ? 100 : 1;
+    o.per_iteration = per_iteration;
+    o.morph.stop = &stop;
+    stopping_sink sink_ctx_ = {{W, H, NULL, 0, 0}, &stop};
+    lsm_err err;
+    lsm_err_clear(&err);
+    lsm_pair_stats stats[1];
+    source_ctx src = {W, H, 0, 1, defs, 2, 0};
+    lsm_slice_source source = {&src, 2, z, src_load, src_name};
+    lsm_slice_sink sink = {&sink_ctx_, stopping_emit};
+    assert_int_equal(lsm_stack_run(&source, W, H, &o, &sink, stats, NULL, &err),
+                     LSM_ERR_INTERRUPTED);
+    assert_int_equal(sink_ctx_.inner.n, 2);
+    sink_free(&sink_ctx_.inner);
+  }
+}
+
+/* ------------------------------------------------------------------------ */
 /* errors                                                                    */
 
 static void test_errors(void **state) {
@@ -1493,6 +1540,7 @@ int main(void) {
       cmocka_unit_test(test_outline_ring),
       cmocka_unit_test(test_outline_vase),
       cmocka_unit_test(test_per_iteration),
+      cmocka_unit_test(test_stop_past_max_iter),
       cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -2,8 +2,13 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/statvfs.h>
 
 #include "solver/app/lsm_signals.h"
+#include "solver/recon/lsm_schedule.h"
 
 /* Longest slice side accepted: keeps every canvas of the stack driver (the
  * image plus alignment margins, at most three times a side) within an int. */
@@ -139,5 +144,190 @@ lsm_status lsm_check_inputs(const lsm_cli *cli, const lsm_slice_files *src, cons
   LSM_TRY(check_limits(cli, src, z, w, h, err));
   *width = w;
   *height = h;
+  return LSM_OK;
+}
+
+/* ---- memory and disk, before any work -------------------------------------------------- */
+
+/* The model of a run's peak memory, in bytes (measured peaks of two-sided
+ * gaps at 512^2 to 4096^2, one and two threads, one and six slices:
+ * validation/measurements/limits.md).  A gap in flight works on a canvas of
+ * (W + 4) x (H + 4) cells where its pair is not aligned (more where it is):
+ * about 40 floats a cell for both morphs and their narrow bands, the signed
+ * distances and slopes of its four slices, the combined field and the
+ * distance transforms' scratch (measured: 123 to 148 bytes); the particles
+ * of pls add 12 more.  The mesh keeps its slab of slices and
+ * vertex maps (about 24 floats a pixel); the slice writer queues at most
+ * 64 MiB of slices. */
+#define LSM_MEM_BASE (16.0 * 1048576.0)
+#define LSM_MEM_GAP_PER_CELL 160.0
+#define LSM_MEM_PLS_PER_CELL 48.0
+#define LSM_MEM_MESH_PER_PIXEL 96.0
+#define LSM_MEM_WRITER_QUEUE (64.0 * 1048576.0)
+
+/* A number from the first line of path (0 when absent, or "max"). */
+static double number_in(const char *path) {
+  FILE *f = fopen(path, "r");
+  if (!f) return 0.0;
+  char line[128] = "";
+  const int ok = fgets(line, sizeof line, f) != NULL;
+  fclose(f);
+  return ok ? strtod(line, NULL) : 0.0;
+}
+
+double lsm_memory_available(void) {
+  double available = 0.0;
+  FILE *f = fopen("/proc/meminfo", "r");
+  if (f) {
+    char line[256];
+    while (fgets(line, sizeof line, f))
+      if (strncmp(line, "MemAvailable:", 13) == 0) available = 1024.0 * strtod(line + 13, NULL);
+    fclose(f);
+  }
+  /* a container's cgroup (v2) may allow less: its limit less what it uses */
+  char group[600] = "", path[700];
+  f = fopen("/proc/self/cgroup", "r");
+  if (f) {
+    char line[600];
+    while (fgets(line, sizeof line, f))
+      if (strncmp(line, "0::", 3) == 0) snprintf(group, sizeof group, "%.500s", line + 3);
+    fclose(f);
+  }
+  group[strcspn(group, "\n")] = '\0';
+  for (int up = 0; up < 2; ++up) { /* the group, then the namespace's root */
+    snprintf(path, sizeof path, "/sys/fs/cgroup%s/memory.max", up ? "" : group);
+    const double limit = number_in(path);
+    snprintf(path, sizeof path, "/sys/fs/cgroup%s/memory.current", up ? "" : group);
+    const double used = number_in(path);
+    if (limit > 0.0 && (available <= 0.0 || limit - used < available))
+      available = limit > used ? limit - used : 1.0;
+  }
+  return available;
+}
+
+/* bytes as "1.5 GiB", "300 MiB", "12 KiB" */
+static const char *bytes_text(double b, char *text, size_t cap) {
+  static const char *const units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB"};
+  int u = 0;
+  while (b >= 1024.0 && u < 5) {
+    b /= 1024.0;
+    ++u;
+  }
+  snprintf(text, cap, u ? "%.3g %s" : "%.0f %s", b, units[u]);
+  return text;
+}
+
+/* Bytes a sample takes in each uncompressed volume format of cli; the
+ * compressed ones (nii.gz, gzip NRRD, EXR) are not counted (their size is
+ * not known ahead).  *names: the formats counted, for the message. */
+static double sample_bytes(const lsm_cli *cli, char *names, size_t cap) {
+  const double each = cli->values == LSM_VALUES_MASK ? 1.0 : 4.0;
+  static const unsigned plain[] = {LSM_FORMAT_NRRD, LSM_FORMAT_MHA, LSM_FORMAT_VTK,
+                                   LSM_FORMAT_NII, LSM_FORMAT_RAW};
+  double total = 0.0;
+  names[0] = '\0';
+  for (size_t k = 0; k < sizeof plain / sizeof plain[0]; ++k) {
+    if (!(cli->formats & plain[k])) continue;
+    if (plain[k] == LSM_FORMAT_NRRD && cli->nrrd_encoding == LSM_NRRD_GZIP) continue;
+    total += each;
+    const size_t n = strlen(names);
+    snprintf(names + n, cap - n, "%s%s", n ? ", " : "", lsm_format_name(plain[k]));
+  }
+  return total;
+}
+
+lsm_status lsm_check_resources(lsm_cli *cli, const lsm_slice_files *src, const double *z, int w,
+                               int h, const char *folder, lsm_err *err) {
+  const lsm_stack_opts *o = &cli->stack;
+  const double pixels = (double)w * (double)h;
+  const double canvas = ((double)w + 4.0) * ((double)h + 4.0);
+  /* the output grid, gap by gap (default mode; per iteration: unknown) */
+  size_t count = 0, most = 0;
+  if (!o->per_iteration) {
+    const double dz = lsm_stack_output_dz(o);
+    const lsm_output_grid g = lsm_output_grid_of(z, src->count, dz);
+    count = lsm_stack_output_count(z, src->count, dz);
+    for (size_t i = 0, k = 0; i + 1 < src->count; ++i) {
+      const size_t first = k;
+      while (k < count && lsm_output_below(&g, k, z[i + 1])) ++k;
+      if (k - first > most) most = k - first;
+    }
+  }
+  const int workers = o->per_iteration ? 1 : lsm_schedule_gap_workers(o, w, h, src->count - 1, most);
+  const double per_gap =
+      canvas * (LSM_MEM_GAP_PER_CELL + (o->method == LSM_METHOD_PLS ? LSM_MEM_PLS_PER_CELL : 0.0));
+  const double held = (double)most * (canvas + (workers > 1 ? pixels : 0.0)) * sizeof(float);
+  const double output = (double)count * pixels * sizeof(float);
+  const double queue = o->per_iteration || output > LSM_MEM_WRITER_QUEUE ? LSM_MEM_WRITER_QUEUE : output;
+  const double fixed = LSM_MEM_BASE + workers * per_gap + queue +
+                       (cli->mesh ? LSM_MEM_MESH_PER_PIXEL * pixels : 0.0);
+  const double memory = fixed + workers * held;
+  const double available = cli->max_memory ? (double)cli->max_memory : lsm_memory_available();
+  char a[32], b[64], c[32];
+  if (cli->max_memory)
+    snprintf(b, sizeof b, "--max-memory %llu", (unsigned long long)cli->max_memory);
+  else
+    snprintf(b, sizeof b, "the %s available", bytes_text(available, c, sizeof c));
+  if (available > 0.0 && memory > available)
+    return lsm_fail(err, LSM_ERR_LIMIT, cli->slice_dir,
+                    "the run needs about %s of memory (%d gap%s at %s working on %dx%d cells%s%s), "
+                    "more than %s: lower --threads (fewer gaps at once), raise --dz (fewer slices "
+                    "per gap), or allow more with --max-memory BYTES",
+                    bytes_text(memory, a, sizeof a), workers, workers == 1 ? "" : "s",
+                    workers == 1 ? "a time," : "once, each", w + 4, h + 4,
+                    most ? " and holding up to " : "", most ? bytes_text(held, c, sizeof c) : "", b);
+  /* what one gap may hold for its turn (per iteration: known only then) */
+  if (available > 0.0) cli->stack.held_max = (available - fixed) / workers;
+  if (o->per_iteration) return LSM_OK;
+  /* disk: what is sure to be written, in the temporary folder's file system */
+  char formats[128];
+  const double volumes = output * sample_bytes(cli, formats, sizeof formats) / sizeof(float);
+  const double pngs = cli->write_slices ? 4096.0 * (double)count : 0.0; /* a block each at least */
+  const double disk = volumes + pngs + 24.0 * (double)count;
+  struct statvfs fs; /* a file system that cannot tell (/proc: no blocks): writing will */
+  if (statvfs(folder, &fs) != 0 || fs.f_blocks == 0) return LSM_OK;
+  const double free_bytes = (double)fs.f_bavail * (double)fs.f_frsize;
+  char d[32];
+  if (disk > free_bytes)
+    return lsm_fail(err, LSM_ERR_LIMIT, cli->out_dir,
+                    "the result needs at least %s on the file system of %s (%zu slices: %s%s%s%s), "
+                    "which has %s free: raise --dz, write fewer --format%s, or name an OUT_DIR "
+                    "with more room",
+                    bytes_text(disk, a, sizeof a), folder, count,
+                    formats[0] ? bytes_text(volumes, b, sizeof b) : "", formats[0] ? " of " : "",
+                    formats, pngs > 0 ? (formats[0] ? " and slice PNGs" : "slice PNGs") : "",
+                    bytes_text(free_bytes, d, sizeof d), cli->write_slices ? ", --no-slices" : "");
+  return LSM_OK;
+}
+
+lsm_status lsm_check_fill_resources(uint64_t max_memory, const lsm_fill_need *need,
+                                    const char *labels_path, const char *folder, lsm_err *err) {
+  /* the volume is held already; the fill adds the gap slices' label depths
+   * (16-bit), and each thread one gap's working canvas and the slices it holds */
+  const double canvas = ((double)need->width + 4.0) * ((double)need->height + 4.0);
+  const double memory = LSM_MEM_BASE + 2.0 * need->gap_voxels +
+                        need->threads * canvas * (LSM_MEM_GAP_PER_CELL + 4.0 * (double)need->most);
+  const double available = max_memory ? (double)max_memory : lsm_memory_available();
+  char a[32], b[64], c[32];
+  if (max_memory)
+    snprintf(b, sizeof b, "--max-memory %llu", (unsigned long long)max_memory);
+  else
+    snprintf(b, sizeof b, "the %s available", bytes_text(available, c, sizeof c));
+  if (available > 0.0 && memory > available)
+    return lsm_fail(err, LSM_ERR_LIMIT, labels_path,
+                    "filling needs about %s of memory more than the volume (%d thread%s, each "
+                    "working on %dx%d cells), more than %s: lower --threads, or allow more with "
+                    "--max-memory BYTES",
+                    bytes_text(memory, a, sizeof a), need->threads, need->threads == 1 ? "" : "s",
+                    need->width + 4, need->height + 4, b);
+  struct statvfs fs;
+  if (need->out_bytes <= 0.0 || statvfs(folder, &fs) != 0 || fs.f_blocks == 0) return LSM_OK;
+  const double free_bytes = (double)fs.f_bavail * (double)fs.f_frsize;
+  if (need->out_bytes > free_bytes)
+    return lsm_fail(err, LSM_ERR_LIMIT, labels_path,
+                    "the result needs %s on the file system of %s, which has %s free: write a "
+                    "compressed file (.nii.gz) or to a file system with more room",
+                    bytes_text(need->out_bytes, a, sizeof a), folder,
+                    bytes_text(free_bytes, c, sizeof c));
   return LSM_OK;
 }

@@ -74,8 +74,12 @@ static const help_row reconstruct_rows[] = {
                                 "with times --spacing (001.png 009.png ...)"),
     OPT("--pixel-size S|SX,SY", "pixel size, or width and height (default 1);\n"
                                 "every length is in this unit"),
-    OPT("--max-pixels N", "refuse larger slices (default 268435456 = 2^28)"),
-    OPT("--max-voxels N", "refuse larger volumes (default 17179869184 = 2^34)"),
+    OPT("--max-pixels N", "refuse larger slices (default 67108864 = 2^26,\n"
+                          "8192 x 8192)"),
+    OPT("--max-voxels N", "refuse larger volumes (default 1073741824 = 2^30,\n"
+                          "1024^3: 4 GiB of float32)"),
+    OPT("--max-memory BYTES", "refuse runs estimated to need more memory\n"
+                              "(default: what is available at the start)"),
     HEAD("Output:"),
     OPT("--dz Z", "output slice spacing (default: the pixel size)"),
     OPT("--per-iteration", "every solver iteration is a slice (the design\n"
@@ -324,7 +328,7 @@ static lsm_status parse_pixel_size(const char *opt, const char *text, double *dx
   return parse_length(opt, comma + 1, dy, err);
 }
 
-/* A limit counted in `unit` (--max-pixels, --max-voxels): a positive whole
+/* A limit counted in `unit` (--max-pixels, --max-voxels, --max-memory): a positive whole
  * number, any form parse_double takes (2^34 as 17179869184 or 1.7179869184e10),
  * up to 9e15 (exact in a double). */
 static lsm_status parse_count(const char *opt, const char *text, const char *unit, uint64_t *out,
@@ -410,8 +414,8 @@ static lsm_status parse_seed(const char *text, uint64_t *out, lsm_err *err) {
 static void cli_defaults(lsm_cli *cli) {
   memset(cli, 0, sizeof *cli);
   cli->spacing = 1.0;
-  cli->max_pixels = (uint64_t)1 << 28;
-  cli->max_voxels = (uint64_t)1 << 34;
+  cli->max_pixels = (uint64_t)1 << 26;
+  cli->max_voxels = (uint64_t)1 << 30;
   cli->write_slices = 1;
   cli->formats = LSM_FORMAT_NRRD;
   cli->values = LSM_VALUES_SDF;
@@ -495,6 +499,7 @@ static lsm_status reconstruct_option(arg_cursor *c, const char *name, const char
   else if (IS("--threads")) INT(1, 4096, cli->threads);
   else if (IS("--max-pixels")) CALL(parse_count(name, v, "pixels", &cli->max_pixels, err));
   else if (IS("--max-voxels")) CALL(parse_count(name, v, "voxels", &cli->max_voxels, err));
+  else if (IS("--max-memory")) CALL(parse_count(name, v, "bytes", &cli->max_memory, err));
   else if (IS("-q") || IS("--quiet")) cli->quiet = 1;
   else
     return lsm_fail(err, LSM_ERR_USAGE, NULL,

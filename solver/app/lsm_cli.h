@@ -47,6 +47,7 @@ typedef struct lsm_cli {
   int threads;               /* 0 = all cores */
   uint64_t max_pixels;       /* per slice */
   uint64_t max_voxels;       /* output volume (checked as written with --per-iteration) */
+  uint64_t max_memory;       /* bytes the run is estimated to need (0: what is available) */
   int write_slices;          /* PNG masks of every output slice */
   const char *backend;       /* --backend NAME: a row of lsm_backend.h's table, or "auto" (default "c") */
   int device;                /* --device N (-1: first GPU, else first device) */

@@ -13,7 +13,10 @@
 #include <unistd.h>
 
 #include "io/lsm_labels.h"
+#include "solver/app/lsm_checks.h"
 #include "solver/app/lsm_cli.h"
+#include "solver/app/lsm_out_file.h"
+#include "solver/app/lsm_signals.h"
 #include "solver/fill/lsm_fill.h"
 #include "solver/pde/lsm_backend.h"
 
@@ -21,7 +24,7 @@
 static const char *const shared_valued[] = {
     "--method", "--interp", "--ends", "--align", "--scheme", "--time", "--cfl",
     "--reinit-every", "--reinit-iters", "--max-iter", "--particles-per-cell", "--pls-reseed",
-    "--seed", "--backend", "--device", "--max-voxels", "--rules-off", NULL};
+    "--seed", "--backend", "--device", "--max-voxels", "--max-memory", "--rules-off", NULL};
 static const char *const shared_flags[] = {"--pls-radius-adjust", "-q", "--quiet", NULL};
 /* fill's own options with a value */
 static const char *const own_valued[] = {"-o", "--output", "--axis", "--slices", "--labels",
@@ -395,10 +398,29 @@ static void fill_progress_update(void *ctx, size_t done, size_t total, size_t pa
 
 /* ---- the run ------------------------------------------------------------------------------------- */
 
+/* Memory and disk before the work (lsm_check_fill_resources). */
+static lsm_status check_resources(const fill_args *a, lsm_label_file *f, const lsm_fill_plan *plan,
+                                  int threads, const lsm_out_file *out, lsm_err *err) {
+  const lsm_voxels *v = lsm_labels_voxels(f);
+  const int u = plan->axis == 0 ? 1 : 0, w = plan->axis == 2 ? 1 : 2;
+  lsm_fill_need need = {0.0, (int)v->n[u], (int)v->n[w], 0, threads, 0.0};
+  need.gap_voxels = (double)plan->gap_slices * (double)v->n[u] * (double)v->n[w];
+  for (size_t k = 0; k + 1 < plan->n_drawn; ++k)
+    if (plan->drawn[k + 1] - plan->drawn[k] - 1 > need.most) need.most = plan->drawn[k + 1] - plan->drawn[k] - 1;
+  const size_t len = strlen(out->path);
+  const int gz_name = len > 3 && strcmp(out->path + len - 3, ".gz") == 0;
+  const int nifti = lsm_labels_format_of(out->path) == LSM_LABELS_NIFTI;
+  if (!(nifti ? gz_name : lsm_labels_compressed(f)))
+    need.out_bytes = (double)v->n[0] * (double)v->n[1] * (double)v->n[2] * (double)lsm_voxel_size(v->type);
+  return lsm_check_fill_resources(a->shared.max_memory, &need, a->labels_path, out->folder, err);
+}
+
 static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_err *err) {
   const int quiet = a->shared.quiet;
   const double t0 = omp_get_wtime();
-  LSM_TRY(lsm_labels_check_output(a->out_path, a->labels_path, err));
+  lsm_out_file out; /* OUT, or the file its link names; stale temporaries removed */
+  LSM_TRY(lsm_out_file_check(&out, a->out_path, quiet ? NULL : stderr, err));
+  LSM_TRY(lsm_labels_check_output(out.path, a->labels_path, err));
   lsm_label_file *f = NULL;
   LSM_TRY(lsm_labels_read(a->labels_path, a->shared.max_voxels, &f, err));
   const double t_read = omp_get_wtime();
@@ -468,6 +490,7 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
       fprintf(stderr, "lsmorph: note: %s has no effect without --method pls\n",
               a->shared.pls_option);
   }
+  if (st == LSM_OK && plan->gap_slices > 0) st = check_resources(a, f, plan, o.threads, &out, err);
   lsm_backend *backend = NULL;
   if (st == LSM_OK && plan->gap_slices > 0) {
     omp_set_num_threads(o.threads);
@@ -484,8 +507,12 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
   if (st == LSM_OK) st = lsm_fill_run(plan, v, &o, &stats, err);
   if (st == LSM_OK) st = note_fill(f, plan, err);
   if (st == LSM_OK && stop && *stop) st = lsm_fail(err, LSM_ERR_INTERRUPTED, NULL, "interrupted");
+  lsm_signal_guard guard; /* a second Ctrl-C removes the temporary files */
+  memset(&guard, 0, sizeof guard);
   const double t_filled = omp_get_wtime();
-  if (st == LSM_OK) st = lsm_labels_write(f, a->out_path, err);
+  if (st == LSM_OK) st = lsm_signals_guard_start(&guard, lsm_out_file_abandon, &out, err);
+  if (st == LSM_OK) st = lsm_labels_write(f, out.path, err);
+  lsm_signals_guard_stop(&guard);
   const double t_end = omp_get_wtime();
   if (st == LSM_OK && !quiet)
     fprintf(stderr,

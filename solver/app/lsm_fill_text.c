@@ -53,7 +53,9 @@ static const char fill_help[] =
     "                         when there are as many as threads, else each label's\n"
     "                         gaps side by side\n"
     "  --backend c|opencl|auto, --device N   as for reconstruct\n"
-    "  --max-voxels N         refuse larger volumes (default 17179869184 = 2^34)\n"
+    "  --max-voxels N         refuse larger volumes (default 1073741824 = 2^30)\n"
+    "  --max-memory BYTES     refuse volumes estimated to need more memory\n"
+    "                         (default: what is available at the start)\n"
     "  -q, --quiet            no notes or progress on stderr (errors still)\n"
     "  --xml                  print the 3D Slicer module description (Slicer runs\n"
     "                         'lsmorph --xml' and then 'lsmorph [flags] fill IN OUT')\n"
@@ -61,8 +63,10 @@ static const char fill_help[] =
     "\n"
     "Errors (exit status 1), all before any work: LABELS is not a label map (values\n"
     "that are not whole numbers; a 4D .seg.nrrd with overlapping layers), fewer than\n"
-    "two drawn slices across the axis, OUT in a missing folder.  Every slice drawn\n"
-    "is a note: nothing to fill, OUT is LABELS copied.  Exit status 2: usage error.\n"
+    "two drawn slices across the axis, OUT in a missing folder, a link to nothing or\n"
+    "a mount point, memory or disk that do not fit (with the numbers).  Every slice\n"
+    "drawn is a note: nothing to fill, OUT is LABELS copied.  Exit status 2: usage\n"
+    "error.\n"
     "Score a result against a full segmentation with 'lsmorph score TRUTH OUT'.\n";
 
 void lsm_fill_help(FILE *f) { fputs(fill_help, f); }

@@ -68,10 +68,7 @@ lsm_out_mode lsm_out_dir_decide(const lsm_out_facts *f, const char **why) {
   return *why ? LSM_OUT_IN_PLACE : LSM_OUT_REPLACE;
 }
 
-/* Whether the folder real (a resolved path) is the root of a mount: another
- * device than its parent, the root itself, or a mount point of this process
- * (a bind mount of a folder of the same file system). */
-static int is_mount_point(const char *real) {
+int lsm_is_mount_point(const char *real) {
   char parent[4200];
   struct stat a, b;
   snprintf(parent, sizeof parent, "%s/..", real);
@@ -149,7 +146,7 @@ static lsm_status gather_facts(lsm_out_dir *o, const char *given, lsm_out_facts 
   if (!f->folder) return LSM_OK;
   char *real = realpath(o->path, NULL);
   if (real) {
-    f->mount_point = is_mount_point(real);
+    f->mount_point = lsm_is_mount_point(real);
     f->holds_cwd = path_within(".", real);
     char parent[4200];
     snprintf(parent, sizeof parent, "%s/..", real);
@@ -368,6 +365,31 @@ lsm_status lsm_out_dir_check(lsm_out_dir *o, const char *out_dir, const char *co
 
 /* ---- writing --------------------------------------------------------------------------- */
 
+void lsm_out_dir_temp_folder(const lsm_out_dir *o, char *folder, size_t cap) {
+  const char *slash = strrchr(o->path, '/');
+  if (o->mode == LSM_OUT_IN_PLACE)
+    snprintf(folder, cap, "%s", o->path);
+  else if (!slash)
+    snprintf(folder, cap, ".");
+  else
+    snprintf(folder, cap, "%.*s", (int)(slash == o->path ? 1 : slash - o->path), o->path);
+}
+
+void lsm_temp_sweep_note(FILE *notes, const char *dir, const char *what,
+                         const lsm_temp_sweep_result *r) {
+  if (!notes) return;
+  const int here = strcmp(dir, ".") == 0;
+  if (r->removed)
+    fprintf(notes, "lsmorph: note: removed %zu temporary %s%s of earlier runs that ended without "
+                   "finishing (%s%s)\n", r->removed, what, r->removed == 1 ? "" : "s",
+            r->first_removed, r->removed > 1 ? ", ..." : "");
+  if (r->unproven)
+    fprintf(notes, "lsmorph: note: %s%s%s%s: left by a run that cannot be shown to have ended "
+                   "(another machine or container, an earlier boot, or an older lsmorph): remove "
+                   "it by hand once no run writes it\n", here ? "" : dir, here ? "" : "/",
+            r->first_unproven, r->unproven > 1 ? " and others" : "");
+}
+
 lsm_status lsm_out_dir_begin(lsm_out_dir *o, FILE *notes, lsm_err *err) {
   o->tmp[0] = '\0';
   lsm_temp_tag(o->tag);
@@ -375,28 +397,17 @@ lsm_status lsm_out_dir_begin(lsm_out_dir *o, FILE *notes, lsm_err *err) {
   char dir[4200], prefix[4200], stem[4200];
   const int in_place = o->mode == LSM_OUT_IN_PLACE;
   const char *slash = strrchr(o->path, '/');
+  lsm_out_dir_temp_folder(o, dir, sizeof dir);
   if (in_place) {
-    snprintf(dir, sizeof dir, "%s", o->path);
     snprintf(prefix, sizeof prefix, "%s", IN_PLACE_PREFIX);
     snprintf(stem, sizeof stem, "%s/%s", o->path, IN_PLACE_PREFIX);
   } else {
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash == o->path ? 1 : slash - o->path) : 1,
-             slash ? o->path : ".");
     snprintf(prefix, sizeof prefix, "%s.tmp-", slash ? slash + 1 : o->path);
     snprintf(stem, sizeof stem, "%s.tmp-", o->path);
   }
   lsm_temp_sweep_result swept;
   lsm_temp_sweep(dir, prefix, NULL, &swept);
-  if (notes && swept.removed)
-    fprintf(notes, "lsmorph: note: removed %zu temporary folder%s of earlier runs that ended "
-                   "without finishing (%s%s)\n", swept.removed, swept.removed == 1 ? "" : "s",
-            swept.first_removed, swept.removed > 1 ? ", ..." : "");
-  if (notes && swept.unproven)
-    fprintf(notes, "lsmorph: note: %s%s%s%s: left by a run that cannot be shown to have ended "
-                   "(another machine or container, an earlier boot, or an older lsmorph): "
-                   "remove it by hand once no run writes it\n", strcmp(dir, ".") ? dir : "",
-            strcmp(dir, ".") ? "/" : "", swept.first_unproven,
-            swept.unproven > 1 ? " and others" : "");
+  lsm_temp_sweep_note(notes, dir, "folder", &swept);
   LSM_TRY(lsm_temp_template(o->tmp, sizeof o->tmp, stem, err));
   if (!mkdtemp(o->tmp)) {
     const int e = errno;

@@ -76,6 +76,10 @@ lsm_status lsm_out_dir_check(lsm_out_dir *o, const char *out_dir, const char *co
                              size_t n_names, const char *slice_dir, const char *heights_file,
                              FILE *notes, lsm_err *err);
 
+/* The folder the temporary folder goes in (OUT_DIR's parent, or OUT_DIR
+ * itself in place): where the disk space is taken. */
+void lsm_out_dir_temp_folder(const lsm_out_dir *o, char *folder, size_t cap);
+
 /* Removes the temporary folders of earlier runs that provably ended (a note
  * names them, and those that cannot be shown to have ended), then creates
  * the temporary folder, with the permissions of a new folder. */
@@ -91,6 +95,18 @@ void lsm_out_dir_abandon(void *ctx);
 /* After a failure: removes the temporary folder, and names the files of a
  * message about it under OUT_DIR, where the user will look for them. */
 void lsm_out_dir_discard(lsm_out_dir *o, lsm_err *err);
+
+/* Whether real (a resolved path) is the root of a mount: a folder on another
+ * device than its parent, the root itself, or a mount point of this process
+ * (a bind mount of a folder or a file, as a container's -v makes). */
+int lsm_is_mount_point(const char *real);
+
+/* The notes on a sweep of dir's stale temporaries (io/lsm_temp.h; what:
+ * "folder" or "file"): those removed, and those left that cannot be shown
+ * stale.  Nothing when notes is NULL. */
+struct lsm_temp_sweep_result;
+void lsm_temp_sweep_note(FILE *notes, const char *dir, const char *what,
+                         const struct lsm_temp_sweep_result *r);
 
 /* Frees what lsm_out_dir_check set up. */
 void lsm_out_dir_free(lsm_out_dir *o);

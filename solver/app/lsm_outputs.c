@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/app/lsm_signals.h"
+
 size_t lsm_output_file_names(const lsm_cli *cli, const char **names, size_t cap) {
   const char *vol[8];
   size_t nv = lsm_volume_file_names(cli->formats, vol, 8);
@@ -131,6 +133,8 @@ lsm_status lsm_outputs_finish(lsm_outputs *o, lsm_status st, lsm_err *err) {
     const double sz = o->per_iteration && o->count > 1 ? lsm_outputs_mean_step(o) : o->dz;
     st = lsm_volume_writer_finish(&o->volume, sz, o->count, err);
   }
+  /* the mesh and the previews take a while on large runs: a stop signal first */
+  if (st == LSM_OK && (o->mesh || o->preview)) st = lsm_signals_check(err);
   if (st == LSM_OK && o->mesh) {
     char path[4200];
     snprintf(path, sizeof path, "%s/surface.ply", o->dir);
@@ -138,6 +142,7 @@ lsm_status lsm_outputs_finish(lsm_outputs *o, lsm_status st, lsm_err *err) {
     if (st == LSM_OK) st = lsm_mesh_write_ply(o->mesh, path, err);
   }
   lsm_mesh_free(&o->mesh);
+  if (st == LSM_OK && o->preview) st = lsm_signals_check(err);
   if (st == LSM_OK && o->preview) {
     char montage[4200], render[4200];
     snprintf(montage, sizeof montage, "%s/preview.png", o->dir);

@@ -228,6 +228,11 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
   lsm_stack_opts_resolve(&cli->stack); /* run.json records what the run uses */
   const int threads = setup_run(cli);
   if (st == LSM_OK) st = open_backend(cli, threads, &backend, err);
+  if (st == LSM_OK) { /* memory and disk: the gaps at once are known with the backend */
+    char folder[4200];
+    lsm_out_dir_temp_folder(&out_dir, folder, sizeof folder);
+    st = lsm_check_resources(cli, &src, z, width, height, folder, err);
+  }
   if (st == LSM_OK) {
     stats = calloc(src.count, sizeof *stats);
     if (!stats) st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate the run");

@@ -30,8 +30,13 @@ typedef struct lsm_run {
   lsm_pinhole_fill *fill; /* set while a gap whose slices have no hole emits */
 } lsm_run;
 
+/* LSM_ERR_INTERRUPTED once the run's stop flag (morph.stop) is set: the
+ * loops of a gap poll it per slice, and the solver per step. */
+lsm_status lsm_run_check_stop(const lsm_run *r, lsm_err *err);
+
 /* Hands r->out, the output slice at height z, to the sink (input_index: the
- * input slice it reproduces, or -1 for an interpolated slice). */
+ * input slice it reproduces, or -1 for an interpolated slice); first checks
+ * the stop flag. */
 lsm_status lsm_emit(lsm_run *r, double z, long input_index, lsm_err *err);
 
 /* Emits input slice s (index `index`) at height z: its own phi. */

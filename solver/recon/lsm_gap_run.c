@@ -158,7 +158,8 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
   int k = 0;
   const int still = st == LSM_OK && !isfinite(lsm_morph_dt(m)); /* nothing can move */
   while (st == LSM_OK && !still && k < r->opts->max_iter) {
-    st = lsm_morph_step(m, INFINITY, err);
+    st = lsm_run_check_stop(r, err);
+    if (st == LSM_OK) st = lsm_morph_step(m, INFINITY, err);
     ++k;
     if (st == LSM_OK && lsm_morph_cp(m) <= r->opts->tol) break;
     if (st == LSM_OK && cap) {
@@ -178,11 +179,13 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
   double solver = lsm_run_seconds() - t0;
   const size_t cells = (size_t)r->width * (size_t)r->height;
   lsm_park *park = NULL;
-  if (st == LSM_OK && reverse && k > 0) st = lsm_park_open(cells, &park, err);
+  if (st == LSM_OK && reverse && k > 0)
+    st = lsm_park_open(cells, (size_t)k, r->opts->held_max, &park, err);
   if (st == LSM_OK && k > 0) st = lsm_morph_create(from, to, &r->morph, &m, err);
   for (int n = 1; st == LSM_OK && n <= k; ++n) {
     double t1 = lsm_run_seconds();
-    st = lsm_morph_step(m, INFINITY, err);
+    st = lsm_run_check_stop(r, err);
+    if (st == LSM_OK) st = lsm_morph_step(m, INFINITY, err);
     if (st != LSM_OK) break;
     const double span = cap ? 0.5 * (double)(k + 1) / (double)k : 1.0; /* last iterate at 1/2 */
     const double s = reverse ? 1.0 - span * (double)n / (double)(k + 1)

@@ -1,49 +1,52 @@
-/* lsm_park: slices parked in an anonymous temporary file (see the header). */
+/* lsm_park: slices held in memory until their turn (see the header). */
 #include "solver/recon/lsm_park.h"
 
-#include <errno.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/types.h>
 
 struct lsm_park {
-  FILE *file;
-  size_t cells;
+  float *slots;
+  size_t cells, count;
 };
 
-lsm_status lsm_park_open(size_t cells, lsm_park **out, lsm_err *err) {
+lsm_status lsm_park_open(size_t cells, size_t slots, double max_bytes, lsm_park **out,
+                         lsm_err *err) {
   *out = NULL;
-  lsm_park *p = lsm_alloc(1, sizeof *p, err, "parked slices");
+  size_t floats;
+  const double bytes = (double)cells * (double)slots * sizeof(float);
+  if (!lsm_size_mul(cells, slots ? slots : 1, &floats) || (max_bytes > 0.0 && bytes > max_bytes))
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL,
+                    "%zu slices of %zu cells wait for their turn in reverse order: %.3g GB, "
+                    "more than the %.3g GB of memory left for them (--max-memory)",
+                    slots, cells, bytes / 1e9, max_bytes / 1e9);
+  lsm_park *p = lsm_alloc(1, sizeof *p, err, "held slices");
   if (!p) return err ? err->status : LSM_ERR_NOMEM;
-  p->cells = cells;
-  if (!(p->file = tmpfile())) {
-    lsm_status st =
-        lsm_fail(err, LSM_ERR_IO, NULL, "cannot create a temporary file: %s", strerror(errno));
+  p->slots = lsm_alloc(floats, sizeof(float), err, "the reverse morph's slices held for their turn");
+  if (!p->slots) {
     free(p);
-    return st;
+    return err ? err->status : LSM_ERR_NOMEM;
   }
+  p->cells = cells;
+  p->count = slots;
   *out = p;
   return LSM_OK;
 }
 
 lsm_status lsm_park_put(lsm_park *p, size_t slot, const float *v, lsm_err *err) {
-  if (fseeko(p->file, (off_t)(slot * p->cells * sizeof(float)), SEEK_SET) != 0 ||
-      fwrite(v, sizeof(float), p->cells, p->file) != p->cells)
-    return lsm_fail(err, LSM_ERR_IO, NULL, "cannot write a temporary file: %s", strerror(errno));
+  if (slot >= p->count) return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "held slice %zu of %zu", slot, p->count);
+  memcpy(p->slots + slot * p->cells, v, p->cells * sizeof(float));
   return LSM_OK;
 }
 
 lsm_status lsm_park_get(lsm_park *p, size_t slot, float *v, lsm_err *err) {
-  if (fseeko(p->file, (off_t)(slot * p->cells * sizeof(float)), SEEK_SET) != 0 ||
-      fread(v, sizeof(float), p->cells, p->file) != p->cells)
-    return lsm_fail(err, LSM_ERR_IO, NULL, "cannot read a temporary file");
+  if (slot >= p->count) return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "held slice %zu of %zu", slot, p->count);
+  memcpy(v, p->slots + slot * p->cells, p->cells * sizeof(float));
   return LSM_OK;
 }
 
 void lsm_park_close(lsm_park **p) {
   if (!p || !*p) return;
-  fclose((*p)->file);
+  free((*p)->slots);
   free(*p);
   *p = NULL;
 }

@@ -148,8 +148,8 @@ static lsm_status gap_task(lsm_run *r, size_t i, const gap_plan *plan, const lsm
  * have their own queue, kernels and buffers (one context), so gaps run side
  * by side there too: the host work of one gap (distance transforms, slopes,
  * combining, writing) overlaps the device work of the others. */
-static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps,
-                       size_t most_slices) {
+int lsm_schedule_gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps,
+                             size_t most_slices) {
   const int threads = o->morph.threads < 1 ? 1 : o->morph.threads;
   const int device = o->morph.backend && !lsm_backend_host_threads(o->morph.backend);
   if (threads == 1 || gaps < 2) return 1;
@@ -161,9 +161,12 @@ static int gap_workers(const lsm_stack_opts *o, int width, int height, size_t ga
   const long long cap = pixels > 0 ? (1LL << 26) / pixels : workers;
   if (device && workers > cap) workers = cap > 1 ? cap : 1;
   /* a gap in flight also buffers its output slices until its turn to write
-   * them: at most 512 MiB of them in all (1024^2 slices with --dz 0.01 over
-   * gaps of 10 buffered 4 GB per gap); one worker writes as it goes */
-  const double buffered = (double)most_slices * (double)pixels * sizeof(float);
+   * them, and holds as many of its reverse morph's slices on its working
+   * canvas, (W + 4) x (H + 4) where the pair is not aligned (lsm_park): at
+   * most 512 MiB of them in all (1024^2 slices with --dz 0.01 over gaps of
+   * 10 buffered 4 GB per gap); one worker writes as it goes */
+  const double canvas = ((double)width + 4.0) * ((double)height + 4.0);
+  const double buffered = (double)most_slices * ((double)pixels + canvas) * sizeof(float);
   const long long fit = buffered > 0.0 ? (long long)((double)(1LL << 29) / buffered) : workers;
   if (workers > fit) workers = fit > 1 ? fit : 1;
   return (int)workers;
@@ -315,7 +318,8 @@ lsm_status lsm_schedule_run(lsm_run *r, lsm_pair_stats *stats, lsm_err *err) {
   for (size_t i = 0; st == LSM_OK && i < gaps; ++i)
     if (plan[i].last - plan[i].first > most_slices) most_slices = plan[i].last - plan[i].first;
   const int workers =
-      st == LSM_OK && !distributed ? gap_workers(opts, width, height, gaps, most_slices) : 1;
+      st == LSM_OK && !distributed ? lsm_schedule_gap_workers(opts, width, height, gaps, most_slices)
+                                   : 1;
   r->gap_workers = workers;
   if (st == LSM_OK && distributed) {
     st = run_distributed(r, plan, &grid, stats, err);

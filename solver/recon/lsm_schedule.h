@@ -35,6 +35,12 @@ int lsm_output_below(const lsm_output_grid *g, size_t k, double z);
 /* Output height k lies no higher than eps above input height z. */
 int lsm_output_not_above(const lsm_output_grid *g, size_t k, double z);
 
+/* How many gaps of the default mode run at once for width x height slices,
+ * gaps gaps, the largest with most_slices output slices (the run's own
+ * choice; the estimate of memory before any work makes it too). */
+int lsm_schedule_gap_workers(const lsm_stack_opts *o, int width, int height, size_t gaps,
+                             size_t most_slices);
+
 /* Runs every gap of r (set up by lsm_stack_run) and emits the whole stack. */
 lsm_status lsm_schedule_run(lsm_run *r, lsm_pair_stats *stats, lsm_err *err);
 

@@ -122,6 +122,8 @@ typedef struct lsm_stack_opts {
   lsm_morph_opts morph;
   const struct lsm_gap_transport *transport; /* NULL: one process (see below) */
   lsm_rules rules;     /* the reconstruction rules switched on, and their constants */
+  double held_max;     /* most bytes of slices one gap may hold for their turn (0: no limit;
+                          per-iteration's count is known only then: the CLI's --max-memory) */
 } lsm_stack_opts;
 
 void lsm_stack_opts_default(lsm_stack_opts *opts);

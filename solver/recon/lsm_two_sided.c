@@ -43,7 +43,7 @@ static inline float two_sided(float fwd, float rev, float a, float b, float thin
  * hence both morphs (rule two-sided).  A pinhole of either slice takes the
  * blend (rule pinhole-blend), so with the cubic profile the monotone spline:
  * a drifting hole moves and resizes continuously.  The reverse snapshots are
- * needed in the opposite order: they are parked (lsm_park). */
+ * needed in the opposite order: they are held in memory (lsm_park). */
 lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const double *fs,
                              size_t n, lsm_pair_stats *ps, lsm_err *err) {
   const lsm_morph_opts *mo = &r->morph;
@@ -64,9 +64,12 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
     st = err ? err->status : LSM_ERR_NOMEM;
   if (st == LSM_OK && both && lsm_rule_on(rules, LSM_RULE_PINHOLE_BLEND))
     st = lsm_pinholes_find(pa, pb, (float)rules->join_thin_px, &pinhole, err);
-  if (st == LSM_OK) st = lsm_park_open(cells, &park, err);
-  /* Reverse morph, latest output first; snapshot k goes to slot k. */
+  if (st == LSM_OK) st = lsm_park_open(cells, n, r->opts->held_max, &park, err);
+  /* Reverse morph, latest output first; snapshot k goes to slot k.  Past
+   * --max-iter no step polls the stop flag: each slot does. */
   for (size_t q = n; st == LSM_OK && q-- > 0;) {
+    st = lsm_run_check_stop(r, err);
+    if (st != LSM_OK) break;
     const double t = lsm_morph_time_of_fraction(1.0 - fs[q]);
     st = lsm_morph_advance_to(rev, t, max_iter, err);
     if (st != LSM_OK) break;
