@@ -30,6 +30,9 @@ lsm_status lsm_run_check_stop(const lsm_run *r, lsm_err *err) {
 
 lsm_status lsm_emit(lsm_run *r, double z, long input_index, lsm_err *err) {
   LSM_TRY(lsm_run_check_stop(r, err)); /* every gap's slice loop, in every schedule */
+  if (input_index < 0 && r->specks)
+    LSM_TRY(lsm_specks_drop(r->specks, r->width, r->height, fmin(r->opts->pixel_dx, r->opts->pixel_dy),
+                            r->out, err));
   if (input_index < 0 && r->fill) LSM_TRY(lsm_pinholes_fill(r->fill, r->opts, r->width, r->height, r->out, err));
   if (lsm_rule_on(&r->opts->rules, LSM_RULE_ZERO_TIES))
     break_zero_ties(r->out, (size_t)r->width * (size_t)r->height,

@@ -4,7 +4,8 @@
  * lsm_run holds what every gap of a run shares (the source, the options, the
  * sink and progress) and what one task owns (its output slice buffer and
  * scratch).  lsm_emit hands the output slice to the sink: a gap's slice
- * first gets its pinholes filled (lsm_pinholes) and its zero ties broken.
+ * first loses the parts beyond those its slices allow (lsm_specks), gets its
+ * pinholes filled (lsm_pinholes) and its zero ties broken.
  */
 #ifndef LSM_EMIT_H
 #define LSM_EMIT_H
@@ -14,6 +15,7 @@
 #include "solver/pde/lsm_morph.h"
 #include "solver/recon/lsm_pinholes.h"
 #include "solver/recon/lsm_slice.h"
+#include "solver/recon/lsm_specks.h"
 #include "solver/recon/lsm_stack.h"
 
 typedef struct lsm_run {
@@ -28,6 +30,7 @@ typedef struct lsm_run {
   size_t done, total;
   int gap_workers;       /* gaps run at once (default mode) */
   lsm_pinhole_fill *fill; /* set while a gap whose slices have no hole emits */
+  const lsm_specks *specks; /* set while a gap between two non-empty slices emits (ls, pls) */
 } lsm_run;
 
 /* LSM_ERR_INTERRUPTED once the run's stop flag (morph.stop) is set: the

@@ -265,9 +265,16 @@ double lsm_end_depth(const lsm_grid *phi) {
   return fmax(-(double)lsm_grid_min(phi), 0.5 * fmin(phi->dx, phi->dy));
 }
 
-double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma, double dx) {
+double lsm_end_depth_in(const lsm_grid *phi, int x0, int y0, int nx, int ny) {
+  float least = 0.0f;
+  for (int j = y0 < 0 ? 0 : y0; j < y0 + ny && j < phi->ny; ++j)
+    for (int i = x0 < 0 ? 0 : x0; i < x0 + nx && i < phi->nx; ++i)
+      least = fminf(least, LSM_AT(phi, i, j));
+  return fmax(-(double)least, 0.5 * fmin(phi->dx, phi->dy));
+}
+
+double lsm_end_cap_depth(double R, double sigma, double dx) {
   if (sigma >= 0.5) return R * (1.0 + 1e-6) + 1e-6 * dx;
-  if (profile == LSM_END_BLEND) return R * sigma / (1.0 - sigma);
   return R * (1.0 - sqrt(1.0 - 2.0 * sigma));
 }
 
@@ -355,11 +362,25 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
   return LSM_OK;
 }
 
+void lsm_end_set_depth(lsm_end *end, double R) { end->R = R; }
+
 void lsm_end_at(lsm_end *e, double sigma, lsm_grid *work) {
   const lsm_grid *full = e->full;
   const lsm_rules *rules = e->rules;
+  if (e->profile == LSM_END_BLEND) {
+    /* the textbook: the empty slice is R; from mid-gap on nothing is left
+     * (at mid-gap the deepest cell's 0 is a tie, outside: a millionth of dx) */
+    const float keep = (float)(1.0 - sigma), rise = (float)(sigma * e->R);
+    const float above = (float)(1e-6 * full->dx);
+    for (int j = 0; j < work->ny; ++j)
+      for (int i = 0; i < work->nx; ++i) {
+        const float v = keep * LSM_AT(full, i, j) + rise;
+        LSM_AT(work, i, j) = sigma >= 0.5 && !(v > 0.0f) ? above : v;
+      }
+    return;
+  }
   if (!lsm_end_profile_is_trend(e->profile)) {
-    const float depth = (float)lsm_end_cap_depth(e->profile, e->R, sigma, full->dx);
+    const float depth = (float)lsm_end_cap_depth(e->R, sigma, full->dx);
     for (int j = 0; j < work->ny; ++j)
       for (int i = 0; i < work->nx; ++i) LSM_AT(work, i, j) = LSM_AT(full, i, j) + depth;
     return;

@@ -6,8 +6,10 @@
  * eroded; phi + e is the exact level-set solution of a uniform inward motion
  * by e, so no PDE is needed.
  *
- * Linear profile (LSM_END_PARABOLOID, LSM_END_BLEND): a uniform erosion by a
- * depth that only the pair sees (lsm_end_cap_depth); the object ends at
+ * Linear profile, ls and pls (LSM_END_PARABOLOID): a uniform erosion by a
+ * depth that only the pair sees (lsm_end_cap_depth).  Blend (LSM_END_BLEND):
+ * the textbook's halfway rule, (1 - sigma) phi_F + sigma R (the empty slice
+ * counts as the constant R, F's largest depth).  Both end the object at
  * mid-gap (sigma >= 1/2 is empty).
  *
  * Cubic profile (LSM_END_TREND): the end continues what the slices N (beyond
@@ -63,11 +65,14 @@ typedef struct lsm_end lsm_end;
  * half a cell): the constant an empty slice stands for next to it. */
 double lsm_end_depth(const lsm_grid *phi);
 
-/* Erosion depth at fraction sigma of the end gap with the linear profile, R
- * the section's largest depth: R (1 - sqrt(1 - 2 sigma)) for the paraboloid,
- * R sigma / (1 - sigma) for the blend; past R from sigma = 1/2 (nothing left:
- * R by a millionth of R and of the cell size dx). */
-double lsm_end_cap_depth(lsm_end_profile profile, double R, double sigma, double dx);
+/* The same over the window of nx x ny cells from (x0, y0) only: a slice's own
+ * image on a working canvas, whose margin is no part of the slice. */
+double lsm_end_depth_in(const lsm_grid *phi, int x0, int y0, int nx, int ny);
+
+/* Erosion depth at fraction sigma of the end gap with the paraboloid, R the
+ * section's largest depth: R (1 - sqrt(1 - 2 sigma)); past R from sigma = 1/2
+ * (nothing left: R by a millionth of R and of the cell size dx). */
+double lsm_end_cap_depth(double R, double sigma, double dx);
 
 /* Whether profile is one of the cubic (trend) profiles, which read N and M. */
 int lsm_end_profile_is_trend(lsm_end_profile profile);
@@ -88,6 +93,10 @@ lsm_status lsm_end_create(const lsm_grid *full, const lsm_grid *beyond, double h
 /* work (F's grid shape) := the object's phi at fraction sigma in [0, 1] of the
  * gap from F to the empty slice. */
 void lsm_end_at(lsm_end *end, double sigma, lsm_grid *work);
+
+/* The linear profiles' R (lsm_end_create takes lsm_end_depth of the whole
+ * grid): set it to F's depth over its own image (lsm_end_depth_in). */
+void lsm_end_set_depth(lsm_end *end, double R);
 
 void lsm_end_destroy(lsm_end **end);
 

@@ -59,6 +59,10 @@ static lsm_status run_gap_cap(lsm_run *r, const lsm_window *w, lsm_gap *g, int a
                         fabs(w->z_farther - w->z[kn]), g->f.H, profile, &o->rules, &end, err);
   lsm_grid_destroy(&beyond);
   lsm_grid_destroy(&farther);
+  /* the linear profiles' R: F's depth on its own image, not the canvas margin */
+  if (st == LSM_OK && !lsm_end_profile_is_trend(profile))
+    lsm_end_set_depth(end, lsm_end_depth_in(full, g->f.pad - g->f.dx[kf], g->f.pad_y - g->f.dy[kf],
+                                            g->f.width, g->f.height));
   for (size_t k = 0; st == LSM_OK && k < n; ++k) {
     lsm_end_at(end, a_empty ? 1.0 - fs[k] : fs[k], work);
     lsm_frame_extract(&g->f, work, fs[k], r->out);
@@ -83,7 +87,8 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
     free(fill.cls);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  if (lsm_rule_on(&r->opts->rules, LSM_RULE_PINHOLE_FILL) &&
+  /* (not for blend: it stays the textbook, holes and all) */
+  if (lsm_rule_on(&r->opts->rules, LSM_RULE_PINHOLE_FILL) && r->opts->method != LSM_METHOD_BLEND &&
       !lsm_mask_has_hole(&a->filled, fill.cls, fill.queue) &&
       !lsm_mask_has_hole(&b->filled, fill.cls, fill.queue))
     r->fill = &fill;
@@ -98,7 +103,16 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
   ps->aligned = g.f.aligned || g.f.end_aligned; /* an end moving on with the pair beyond */
   ps->moving_parts = g.parts;
-  if ((a->empty && b->empty) || g.rest_empty) {
+  /* no more parts than the slices' overlap groups allow (rule one-piece; not
+   * for blend, the textbook) */
+  lsm_specks specks = {0, fill.cls, fill.queue};
+  if (!a->empty && !b->empty && !g.rest_empty && r->opts->method != LSM_METHOD_BLEND &&
+      lsm_rule_on(&r->opts->rules, LSM_RULE_ONE_PIECE)) {
+    st = lsm_specks_allowed(&a->filled, &b->filled, g.f.dx[2] - g.f.dx[1], g.f.dy[2] - g.f.dy[1],
+                            fill.cls, fill.queue, &specks.allowed, err);
+    r->specks = &specks;
+  }
+  if (st == LSM_OK && ((a->empty && b->empty) || g.rest_empty)) {
     lsm_grid_fill(g.phi_a, g.f.clamp);
     for (size_t k = 0; st == LSM_OK && k < n; ++k) {
       lsm_frame_extract(&g.f, g.phi_a, fs[k], r->out);
@@ -106,9 +120,9 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
       st = lsm_emit(r, zs[k], -1, err);
       ps->slices++;
     }
-  } else if (a->empty != b->empty) {
+  } else if (st == LSM_OK && a->empty != b->empty) {
     st = run_gap_cap(r, w, &g, a->empty, zs, fs, n, ps, err);
-  } else if (r->opts->method == LSM_METHOD_BLEND) {
+  } else if (st == LSM_OK && r->opts->method == LSM_METHOD_BLEND) {
     lsm_grid *mix = NULL;
     st = lsm_grid_clone(g.phi_a, &mix, err);
     for (size_t k = 0; st == LSM_OK && k < n; ++k) {
@@ -122,11 +136,12 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
       ps->slices++;
     }
     lsm_grid_destroy(&mix);
-  } else {
+  } else if (st == LSM_OK) {
     st = lsm_two_sided_run(r, &g, zs, fs, n, ps, err);
   }
   lsm_gap_free(&g);
   r->fill = NULL;
+  r->specks = NULL;
   lsm_grid_destroy(&fill.phi_a);
   lsm_grid_destroy(&fill.phi_b);
   free(fill.cls);

@@ -144,10 +144,16 @@
     "a drifting hole fits neither join: it is shut or split; the blend moves it",                 \
     "the two-sided value")                                                                        \
   X(PINHOLE_FILL, "pinhole-fill",                                                                 \
-    "between two slices without holes, an output hole of at most pinhole_fill_cells cells, each " \
-    "within pinhole_fill_thin_px of the inside and inside one slice, is filled",                  \
+    "ls/pls, between two slices without holes: an output hole of at most pinhole_fill_cells "      \
+    "cells, each within pinhole_fill_thin_px of the inside and inside one slice, is filled",       \
     "the morph leaves such holes where two parts merge (a ridge of phi)",                         \
     "the holes are kept")                                                                         \
+  X(ONE_PIECE, "one-piece",                                                                       \
+    "ls/pls, between two non-empty slices: an output slice keeps at most as many parts as the "   \
+    "slices' overlap groups allow (per group the larger of its two counts), the largest",         \
+    "a part appearing between two slices grows as one piece; the morph's fronts leave specks "    \
+    "where a new part's ridges cross the other slice's parts",                                    \
+    "the specks are kept")                                                                        \
   /* where objects end (lsm_ends, lsm_gap_run) */                                                 \
   X(ENDS_AUTO, "ends-auto",                                                                       \
     "--ends auto: the tip where the empty slice is the stack's first or last, nothing past "      \
