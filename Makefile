@@ -190,7 +190,7 @@ $(BUILD)/fuzz/liblsmorph.a: $(FUZZ_OBJ)
 $(BUILD)/fuzz/fuzz_%: tests/fuzz/fuzz_%.c $(BUILD)/fuzz/liblsmorph.a
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer $< $(BUILD)/fuzz/liblsmorph.a -o $@ $(LDLIBS)
 
-bench: all $(BUILD)/bench/bench_scheme $(BUILD)/bench/bench_opencl
+bench: all $(BUILD)/bench/bench_scheme $(BUILD)/bench/bench_opencl $(BUILD)/bench/bench_morph
 	@sh tests/bench.sh $(BUILD)
 
 $(BUILD)/bench/%: tests/%.c $(BUILD)/liblsmorph.a

@@ -1,7 +1,8 @@
 #!/bin/sh
 # make bench: speed of the upwind update against NumPy, Roe-Fix, threads,
 # peak memory of a reconstruction with 10 and 60 slices, the share of the
-# previews and slice PNGs in a default run, and lsmorph fill on a
+# previews and slice PNGs in a default run, the narrow band against the full
+# grid (tests/bench_morph.c, tests/bench_band.py), and lsmorph fill on a
 # 512 x 512 x 200 label map against ITK's MorphologicalContourInterpolator.
 set -eu
 BUILD=${1:-build}
@@ -61,6 +62,19 @@ print("previews %.3f s, slice PNGs %.3f s; both: %.1f %% of the default run (tar
       % (med["--no-slices"] - med["neither"], med["--no-preview"] - med["neither"], 100 * share,
          "PASS" if share <= 0.10 else "FAIL"))
 PYEOF
+
+echo
+echo "== the narrow band against the full grid (--band off), the same runs (issue 56) =="
+echo "one pair morph, C path (mode N threads seconds steps cell_updates cells_per_second):"
+"$BUILD"/bench/bench_morph 1
+"$BUILD"/bench/bench_morph 2
+# default runs end to end; LSMORPH_BENCH_BASE=path/to/lsmorph adds an older build (the build
+# before the band) to the same interleaved runs; the stand-ins are made once into $BUILD/bench-band
+# (with ITK's MCI when tests/bench_fill.sh has installed it)
+MCI_DIR=${LSMORPH_MESH_CACHE:-$HOME/.cache/lsmorph-meshes}/mci
+[ -f "$MCI_DIR/mci.mjs" ] && command -v node >/dev/null 2>&1 || MCI_DIR=
+$PY tests/bench_band.py "$BUILD/lsmorph" "$BUILD/bench-band" \
+  ${LSMORPH_BENCH_BASE:+--base "$LSMORPH_BENCH_BASE"} ${MCI_DIR:+--mci "$MCI_DIR"}
 
 echo
 sh tests/bench_fill.sh "$BUILD"

@@ -652,10 +652,12 @@ static void pls_matches_c(const pls_case *pc, int band) {
   assert_int_equal((long long)0 + live_c, 0 + (long long)qc->seeded - qc->discarded -
                                               qc->left_domain - qc->reseed_dropped);
   /* the particles did work: escaped and corrected; on the harsh pair also
-   * left the domain, and strayed (Euler and RK2 without radius adjustment) */
+   * left the domain, and strayed (Euler and RK2 without radius adjustment; with the band
+   * and reseeding every 60 steps none stray: its strays are exercised without reseeding) */
   assert_true(qc->escaped_total > 0 && qc->corrected_total > 0);
   if (pc->harsh) assert_true(qc->left_domain > qc->stray);
-  if (pc->harsh && pc->time != LSM_TIME_RK3 && !pc->radius_adjust) assert_true(qc->stray > 0);
+  if (pc->harsh && pc->time != LSM_TIME_RK3 && !pc->radius_adjust && !(band && pc->reseed_every))
+    assert_true(qc->stray > 0);
   if (pc->reseed_every > 0) assert_int_equal(qg->reseeds, steps / pc->reseed_every);
   lsm_morph_destroy(&mc);
   lsm_morph_destroy(&mg);

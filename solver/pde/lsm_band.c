@@ -37,10 +37,15 @@ struct lsm_band {
   const float *target;        /* borrowed: the caller's phi_target */
   lsm_grid *amplitude;        /* phi = target + amplitude g outside the band */
   uint64_t *band, *next, *kept, *rim, *row_tmp; /* bitmaps (ny words rows), a row */
+  uint64_t *facing; /* cells kept from the start: the slices' fronts face each other */
   vec heap;                   /* heap_entry: max-heap on g */
   vec run_start, run_length, rim_cells, rim_amplitude, enter, enter_value;
   size_t cells;
+  int kept_lo, kept_hi, band_lo, band_hi; /* rows holding kept levels, band cells (lo > hi: none) */
+  int facing_lo, facing_hi;               /* ... facing cells */
+  uint8_t *flags;                         /* a run's kept flags (nx) */
   float speed, enter_speed;
+  int edge; /* the band's stencils read the ghost ring */
 };
 
 static int vec_reserve(vec *v, size_t need) {
@@ -80,6 +85,44 @@ static double enter_g(float target, float amplitude, float level, double g_now) 
   if (amplitude > 0.0f && target <= level) g = ((double)level - target) / amplitude;
   if (amplitude < 0.0f && target >= -level) g = ((double)level + target) / -amplitude;
   return g < g_now ? g : -1.0;
+}
+
+/* The g below g_now at which cell k's value t + a g becomes an extremum of its 4-neighbours'
+ * that the morph holds: a minimum where phi falls towards the target (a > 0), a maximum where
+ * it rises (a < 0).  The upwind Hamiltonian is 0 there (the viscosity solution keeps such an
+ * extremum), so from then on the cell no longer follows t + a g: it must be in the band.  Each
+ * neighbour n bounds g by the sign of (t_n - t_k) + g (a_n - a_k); -1: never, or already (the
+ * kept levels decide then). */
+static double extremum_g(const float *t, const float *a, ptrdiff_t k, ptrdiff_t s, int i, int j,
+                         int nx, int ny, double g_now) {
+  if (a[k] == 0.0f) return -1.0;
+  const double sign = a[k] > 0.0f ? 1.0 : -1.0;
+  const ptrdiff_t nb[4] = {k - 1, k + 1, k - s, k + s};
+  const int inside[4] = {i > 0, i + 1 < nx, j > 0, j + 1 < ny};
+  double lo = 0.0, hi = INFINITY;
+  for (int q = 0; q < 4; ++q) {
+    if (!inside[q]) continue; /* the ghost repeats the cell: no bound */
+    const double p = sign * ((double)t[nb[q]] - t[k]), r = sign * ((double)a[nb[q]] - a[k]);
+    if (r > 0.0) {
+      const double g = -p / r;
+      lo = g > lo ? g : lo;
+    } else if (r < 0.0) {
+      const double g = p / -r;
+      hi = g < hi ? g : hi;
+    } else if (p < 0.0) {
+      return -1.0;
+    }
+  }
+  return hi >= lo && hi > 0.0 && hi < g_now ? hi : -1.0;
+}
+
+/* The g at which cell k (column i, row j) enters the band by itself: the larger of the two
+ * above; -1 never. */
+static double wait_g(const lsm_band *b, ptrdiff_t k, int i, int j, double g_now) {
+  const float *a = b->amplitude->data;
+  const double level = enter_g(b->target[k], a[k], b->p.level, g_now);
+  const double extremum = extremum_g(b->target, a, k, b->stride, i, j, b->nx, b->ny, g_now);
+  return extremum > level ? extremum : level;
 }
 
 static int heap_push(vec *h, heap_entry x) {
@@ -137,21 +180,33 @@ static inline int has_bit(const lsm_band *b, const uint64_t *map, ptrdiff_t k) {
   return (int)((map[(size_t)j * (size_t)b->words + (size_t)(i >> 6)] >> (i & 63)) & 1u);
 }
 
-static inline void set_bit(const lsm_band *b, uint64_t *map, ptrdiff_t k) {
+/* Sets cell k's bit; returns its row. */
+static inline int set_bit(const lsm_band *b, uint64_t *map, ptrdiff_t k) {
   int j = (int)((double)k * b->inv_stride);
   while ((ptrdiff_t)(j + 1) * b->stride <= k) ++j;
   while ((ptrdiff_t)j * b->stride > k) --j;
   const int i = (int)(k - (ptrdiff_t)j * b->stride);
   map[(size_t)j * (size_t)b->words + (size_t)(i >> 6)] |= (uint64_t)1 << (i & 63);
+  return j;
 }
 
-/* One 4-neighbour step of dilation of map in place: each row ORed with its neighbours one
- * column either side and with the rows above and below (as they were). */
-static void dilate_step(lsm_band *b, uint64_t *map) {
+/* Widens the row range *lo .. *hi to hold row j. */
+static inline void note_row(int *lo, int *hi, int j) {
+  if (j < *lo) *lo = j;
+  if (j > *hi) *hi = j;
+}
+
+/* One 4-neighbour step of dilation of map in place over its rows *lo .. *hi (the others are
+ * empty), which grow by one: each row ORed with its neighbours one column either side and
+ * with the rows above and below (as they were). */
+static void dilate_step(lsm_band *b, uint64_t *map, int *lo, int *hi) {
   const int w = b->words;
+  if (*lo > *hi) return;
+  if (*lo > 0) --*lo;
+  if (*hi + 1 < b->ny) ++*hi;
   uint64_t *above = b->row_tmp, *here = b->row_tmp + w;
   memset(above, 0, (size_t)w * sizeof *above);
-  for (int j = 0; j < b->ny; ++j) {
+  for (int j = *lo; j <= *hi; ++j) {
     uint64_t *row = row_bits(b, map, j);
     memcpy(here, row, (size_t)w * sizeof *here);
     const uint64_t *below = j + 1 < b->ny ? row_bits(b, map, j + 1) : NULL;
@@ -170,17 +225,18 @@ static void dilate_step(lsm_band *b, uint64_t *map) {
   }
 }
 
-/* Every byte (a segment) of map with a bit set becomes whole, within the grid. */
-static void widen_segments(lsm_band *b, uint64_t *map) {
-  const size_t n = (size_t)b->ny * (size_t)b->words;
-  for (size_t q = 0; q < n; ++q) {
-    uint64_t x = map[q];
-    x |= x >> 1;
-    x |= x >> 2;
-    x |= x >> 4;
-    x &= 0x0101010101010101u;
-    map[q] = x * 0xFFu;
-    if ((q + 1) % (size_t)b->words == 0) map[q] &= b->last_mask;
+/* Every byte (a segment) of map's rows lo .. hi with a bit set becomes whole, within the grid. */
+static void widen_segments(lsm_band *b, uint64_t *map, int lo, int hi) {
+  for (int j = lo; j <= hi; ++j) {
+    uint64_t *row = row_bits(b, map, j);
+    for (int q = 0; q < b->words; ++q) {
+      uint64_t x = row[q];
+      x |= x >> 1;
+      x |= x >> 2;
+      x |= x >> 4;
+      row[q] = (x & 0x0101010101010101u) * 0xFFu;
+    }
+    row[b->words - 1] &= b->last_mask;
   }
 }
 
@@ -195,15 +251,18 @@ static lsm_status build(lsm_band *b, const float *phi, float g, lsm_err *err) {
   const ptrdiff_t s = b->stride;
   float *a = b->amplitude->data;
   memcpy(b->next, b->kept, n * sizeof *b->next);
-  for (int d = 0; d < b->p.travel + b->p.reach; ++d) dilate_step(b, b->next);
-  widen_segments(b, b->next);
-  /* entering and leaving cells; the runs */
+  int lo = b->kept_lo, hi = b->kept_hi;
+  for (int d = 0; d < b->p.travel + b->p.reach; ++d) dilate_step(b, b->next, &lo, &hi);
+  widen_segments(b, b->next, lo, hi);
+  /* entering and leaving cells over the rows of either band; the runs */
   b->enter.n = b->run_start.n = 0;
   b->cells = 0;
   float enter_speed = 0.0f;
-  for (int j = 0; j < b->ny; ++j) {
+  const int j0 = lo < b->band_lo ? lo : b->band_lo, j1 = hi > b->band_hi ? hi : b->band_hi;
+  for (int j = j0; j <= j1; ++j) {
     const uint64_t *now = row_bits(b, b->band, j), *next = row_bits(b, b->next, j);
     for (int q = 0; q < w; ++q) {
+      if (!(next[q] | now[q])) continue;
       uint64_t in = next[q] & ~now[q], out = now[q] & ~next[q];
       b->cells += (size_t)__builtin_popcountll(next[q]);
       if (phi && in) {
@@ -222,13 +281,18 @@ static lsm_status build(lsm_band *b, const float *phi, float g, lsm_err *err) {
       for (; phi && out; out &= out - 1) {
         const ptrdiff_t k = (ptrdiff_t)j * s + 64 * q + __builtin_ctzll(out);
         a[k] = (float)(((double)phi[k] - (double)b->target[k]) / (double)g);
-        const double ge = enter_g(b->target[k], a[k], b->p.level, g);
+        const int i = 64 * q + __builtin_ctzll(out);
+        const double ge = wait_g(b, k, i, j, g);
         if (ge > 0.0 && !heap_push(&b->heap, (heap_entry){ge, a[k], (int32_t)k}))
           return NOMEM(err);
       }
     }
     /* runs: consecutive segments (bytes; the last one clipped to the grid) */
     for (int m = 0; m < w * 8; ++m) {
+      if (!(m & 7) && !next[m >> 3]) {
+        m += 7;
+        continue;
+      }
       if (!((next[m >> 3] >> (8 * (m & 7))) & 0xFFu)) continue;
       const int i0 = 8 * m;
       int len = b->nx - i0 < 8 ? b->nx - i0 : 8;
@@ -253,11 +317,23 @@ static lsm_status build(lsm_band *b, const float *phi, float g, lsm_err *err) {
   uint64_t *t = b->band;
   b->band = b->next;
   b->next = t;
+  b->band_lo = lo;
+  b->band_hi = hi;
   /* the rim: within reach of the band, outside it */
   memcpy(b->rim, b->band, n * sizeof *b->rim);
-  for (int d = 0; d < b->p.reach; ++d) dilate_step(b, b->rim);
+  for (int d = 0; d < b->p.reach; ++d) dilate_step(b, b->rim, &lo, &hi);
+  /* the stencils read the ghost ring when the band comes within reach of the grid's edge */
+  b->edge = 0;
+  for (int j = lo; j <= hi && !b->edge; ++j) {
+    const uint64_t *rim = row_bits(b, b->rim, j);
+    if (j == 0 || j + 1 == b->ny) {
+      for (int q = 0; q < w; ++q) b->edge |= rim[q] != 0;
+    } else {
+      b->edge = (rim[0] & 1u) || ((rim[(b->nx - 1) >> 6] >> ((b->nx - 1) & 63)) & 1u);
+    }
+  }
   b->rim_cells.n = 0;
-  for (int j = 0; j < b->ny; ++j) {
+  for (int j = lo; j <= hi; ++j) {
     const uint64_t *band = row_bits(b, b->band, j), *rim = row_bits(b, b->rim, j);
     for (int q = 0; q < w; ++q) {
       uint64_t x = rim[q] & ~band[q];
@@ -278,12 +354,27 @@ static lsm_status build(lsm_band *b, const float *phi, float g, lsm_err *err) {
   return LSM_OK;
 }
 
-/* A kept level: |v| <= level, or a sign change against a 4-neighbour (the front).  phi holds
- * values at the cell and its 4-neighbours (the band's, its rim's and ghosts'). */
-static inline int kept(const float *p, ptrdiff_t k, ptrdiff_t s, float level) {
-  const float v = p[k];
-  return fabsf(v) <= level || lsm_opposite(v, p[k - 1]) || lsm_opposite(v, p[k + 1]) ||
-         lsm_opposite(v, p[k - s]) || lsm_opposite(v, p[k + s]);
+/* Whether the gradients of the two slices' distances (central differences) are more than 90
+ * degrees apart at interior cell k: the slices' fronts face each other there, and the blend's
+ * gradient |(1 - s) grad a + s grad b| falls below cos 45 degrees on the way. */
+static int facing(const float *a, const float *b, ptrdiff_t k, ptrdiff_t s) {
+  const float ax = a[k + 1] - a[k - 1], ay = a[k + s] - a[k - s];
+  const float bx = b[k + 1] - b[k - 1], by = b[k + s] - b[k - s];
+  return ax * bx + ay * by < 0.0f;
+}
+
+/* A kept level: |v| <= level, a sign change against a 4-neighbour (the front), or an extremum
+ * the morph holds.  phi holds values at the cell and its 4-neighbours (the band's, its rim's
+ * and ghosts'). */
+static inline int kept(const float *p, const float *t, ptrdiff_t k, ptrdiff_t s, float level) {
+  const float v = p[k], l = p[k - 1], r = p[k + 1], d = p[k - s], u = p[k + s];
+  const float lo = lsm_minf(lsm_minf(l, r), lsm_minf(d, u));
+  const float hi = lsm_maxf(lsm_maxf(l, r), lsm_maxf(d, u));
+  const float F = v - t[k];
+  /* near zero; a sign change against a neighbour (the front); an extremum the morph holds
+   * (extremum_g): a minimum where phi falls, a maximum where it rises */
+  return (fabsf(v) <= level) | (v > 0.0f && lo < 0.0f) | (v < 0.0f && hi > 0.0f) |
+         (F > 0.0f && v <= lo) | (F < 0.0f && v >= hi);
 }
 
 lsm_status lsm_band_create(const lsm_grid *phi_source, const lsm_grid *phi_target,
@@ -320,32 +411,57 @@ lsm_status lsm_band_create(const lsm_grid *phi_source, const lsm_grid *phi_targe
     b->kept = calloc(words, sizeof(uint64_t));
     b->rim = calloc(words, sizeof(uint64_t));
     b->row_tmp = calloc(2 * (size_t)b->words, sizeof(uint64_t));
-    if (!b->band || !b->next || !b->kept || !b->rim || !b->row_tmp)
+    b->flags = malloc((size_t)nx);
+    if (!b->band || !b->next || !b->kept || !b->rim || !b->row_tmp || !b->flags)
       st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a narrow band");
   }
   /* the source's kept levels (its ghosts filled), amplitudes, and the cells that wait on the
    * heap for their values to come near zero (those the band takes in are dropped later) */
   float *amp = b->amplitude->data;
-  const float *src = phi_source->data;
-  size_t waiting = 0;
+  const float *src = phi_source->data, *t = b->target;
+  if (st == LSM_OK && !(b->facing = calloc(words, sizeof(uint64_t))))
+    st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot allocate a narrow band");
   for (int j = 0; st == LSM_OK && j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const ptrdiff_t k = (ptrdiff_t)j * s + i;
-      amp[k] = src[k] - b->target[k];
-      if (kept(src, k, s, params->level))
-        row_bits(b, b->kept, j)[i >> 6] |= (uint64_t)1 << (i & 63);
-      else
-        waiting += enter_g(b->target[k], amp[k], params->level, 1.0) > 0.0;
+      amp[k] = src[k] - t[k];
     }
-  if (st == LSM_OK && !vec_reserve(&b->heap, waiting)) st = NOMEM(err);
+  /* the source's kept levels (its ghosts filled); where the two slices' fronts face each other
+   * and the value will come near zero, the morph departs from t + a g at once (a split, a
+   * merge, a hole, a part appearing): those cells are kept from the start; the others wait on
+   * the heap for their values to come near zero (heap_sift orders it below) */
+  for (int j = 0; st == LSM_OK && j < ny; ++j) {
+    uint64_t *kept_row = row_bits(b, b->kept, j), *facing_row = row_bits(b, b->facing, j);
+    for (int i = 0; i < nx; ++i) {
+      const ptrdiff_t k = (ptrdiff_t)j * s + i;
+      const uint64_t bit = (uint64_t)1 << (i & 63);
+      const int opposed = i > 0 && j > 0 && i + 1 < nx && j + 1 < ny && facing(src, t, k, s);
+      const double ge = enter_g(t[k], amp[k], params->level, 1.0);
+      if (opposed && ge > 0.0) {
+        kept_row[i >> 6] |= bit;
+        facing_row[i >> 6] |= bit;
+      } else if (kept(src, t, k, s, params->level)) {
+        kept_row[i >> 6] |= bit;
+      } else {
+        const double wait = wait_g(b, k, i, j, 1.0);
+        if (wait > 0.0) {
+          if (!vec_reserve(&b->heap, b->heap.n + 1)) {
+            st = NOMEM(err);
+            break;
+          }
+          ((heap_entry *)b->heap.data)[b->heap.n++] = (heap_entry){wait, amp[k], (int32_t)k};
+        }
+      }
+    }
+  }
+  b->kept_lo = b->facing_lo = b->band_lo = ny;
+  b->kept_hi = b->facing_hi = b->band_hi = -1;
+  for (int j = 0; st == LSM_OK && j < ny; ++j)
+    for (int q = 0; q < b->words; ++q) {
+      if (row_bits(b, b->kept, j)[q]) note_row(&b->kept_lo, &b->kept_hi, j);
+      if (row_bits(b, b->facing, j)[q]) note_row(&b->facing_lo, &b->facing_hi, j);
+    }
   heap_entry *e = b->heap.data;
-  for (int j = 0; st == LSM_OK && j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      if ((row_bits(b, b->kept, j)[i >> 6] >> (i & 63)) & 1u) continue;
-      const ptrdiff_t k = (ptrdiff_t)j * s + i;
-      const double ge = enter_g(b->target[k], amp[k], params->level, 1.0);
-      if (ge > 0.0) e[b->heap.n++] = (heap_entry){ge, amp[k], (int32_t)k};
-    }
   for (size_t k = b->heap.n / 2; st == LSM_OK && k-- > 0;) heap_sift(e, b->heap.n, k, e[k]);
   if (st == LSM_OK) st = build(b, NULL, 1.0f, err);
   const int32_t *rs = b->run_start.data, *rl = b->run_length.data;
@@ -368,6 +484,8 @@ void lsm_band_destroy(lsm_band **band) {
   free(b->kept);
   free(b->rim);
   free(b->row_tmp);
+  free(b->flags);
+  free(b->facing);
   vec *v[] = {&b->heap, &b->run_start, &b->run_length, &b->rim_cells, &b->rim_amplitude,
               &b->enter, &b->enter_value};
   for (size_t q = 0; q < sizeof v / sizeof v[0]; ++q) vec_free(v[q]);
@@ -379,7 +497,9 @@ lsm_status lsm_band_rebuild(lsm_band *b, const lsm_grid *phi, double g, lsm_err 
   const float level = b->p.level;
   const float *p = phi->data, *a = b->amplitude->data;
   const ptrdiff_t s = b->stride;
-  memset(b->kept, 0, (size_t)b->ny * (size_t)b->words * sizeof *b->kept);
+  memcpy(b->kept, b->facing, (size_t)b->ny * (size_t)b->words * sizeof *b->kept);
+  b->kept_lo = b->facing_lo;
+  b->kept_hi = b->facing_hi;
   float speed = 0.0f;
   /* the kept levels lie in the old band (a level moves at most `travel` cells between
    * rebuilds) ... */
@@ -389,18 +509,25 @@ lsm_status lsm_band_rebuild(lsm_band *b, const lsm_grid *phi, double g, lsm_err 
     while ((ptrdiff_t)(j + 1) * s <= rs[r]) ++j;
     while ((ptrdiff_t)j * s > rs[r]) --j;
     uint64_t *row = row_bits(b, b->kept, j);
-    const int i0 = (int)(rs[r] - (ptrdiff_t)j * s);
-    for (int i = i0; i < i0 + rl[r]; ++i) {
-      const ptrdiff_t k = (ptrdiff_t)j * s + i;
+    const int i0 = (int)(rs[r] - (ptrdiff_t)j * s), len = rl[r];
+    /* flags of a run, branch-free (vectorised), then its bits */
+    for (int q = 0; q < len; ++q) {
+      const ptrdiff_t k = rs[r] + q;
       speed = lsm_maxf(speed, fabsf(p[k] - b->target[k]));
-      if (kept(p, k, s, level)) row[i >> 6] |= (uint64_t)1 << (i & 63);
+      b->flags[q] = (uint8_t)kept(p, b->target, k, s, level);
     }
+    uint64_t any = 0;
+    for (int q = 0; q < len; ++q) {
+      row[(i0 + q) >> 6] |= (uint64_t)b->flags[q] << ((i0 + q) & 63);
+      any |= b->flags[q];
+    }
+    if (any) note_row(&b->kept_lo, &b->kept_hi, j);
   }
   /* ... or where a value outside it has come near zero (a front may appear there) */
   while (b->heap.n && ((heap_entry *)b->heap.data)[0].g >= g) {
     const heap_entry e = heap_pop(&b->heap);
     if (has_bit(b, b->band, e.k) || a[e.k] != e.amplitude) continue; /* stale */
-    set_bit(b, b->kept, e.k);
+    note_row(&b->kept_lo, &b->kept_hi, set_bit(b, b->kept, e.k));
   }
   LSM_TRY(build(b, p, (float)g, err));
   b->speed = lsm_maxf(speed, b->enter_speed);
@@ -417,7 +544,8 @@ lsm_band_lists lsm_band_get(const lsm_band *b) {
                           .rim_cells = b->rim_cells.n,
                           .enter = b->enter.data,
                           .enter_value = b->enter_value.data,
-                          .entered = b->enter.n};
+                          .entered = b->enter.n,
+                          .edge = b->edge};
 }
 
 void lsm_band_materialize(const lsm_band *b, const lsm_grid *phi, double g, lsm_grid *out,
@@ -429,9 +557,18 @@ void lsm_band_materialize(const lsm_band *b, const lsm_grid *phi, double g, lsm_
   for (int j = 0; j < b->ny; ++j) {
     const ptrdiff_t row = (ptrdiff_t)j * b->stride;
     const uint64_t *in = row_bits(b, b->band, j);
-    for (int i = 0; i < b->nx; ++i)
-      o[row + i] = (in[i >> 6] >> (i & 63)) & 1u ? p[row + i]
-                                                 : lsm_relaxed(b->target[row + i], amp[row + i], gf);
+    for (int q = 0; q < b->words; ++q) {
+      const int i0 = 64 * q, i1 = i0 + 64 < b->nx ? i0 + 64 : b->nx;
+      const uint64_t w = in[q];
+      if (!w) { /* a word outside the band: a loop that vectorises */
+        for (int i = i0; i < i1; ++i)
+          o[row + i] = lsm_relaxed(b->target[row + i], amp[row + i], gf);
+      } else {
+        for (int i = i0; i < i1; ++i)
+          o[row + i] = (w >> (i & 63)) & 1u ? p[row + i]
+                                            : lsm_relaxed(b->target[row + i], amp[row + i], gf);
+      }
+    }
   }
 }
 

@@ -52,6 +52,7 @@ typedef struct lsm_band_lists {
   const int32_t *enter;                  /* cells that entered the band, and their values */
   const float *enter_value;
   size_t entered;
+  int edge;                              /* the band's stencils reach the ghost ring */
 } lsm_band_lists;
 
 /* The band of phi_source (its ghosts filled), relaxing towards phi_target (same size,

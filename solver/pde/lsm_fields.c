@@ -20,6 +20,7 @@ struct lsm_fields {
   const lsm_grid *band_target; /* borrowed from the caller of lsm_fields_band_start */
   lsm_band_params band_params;
   float band_h;              /* the smaller cell side */
+  int band_edge;             /* the band's stencils reach the ghost ring */
   double g[LSM_FIELD_COUNT]; /* each field's cells outside the band: target + amplitude g */
   double travel;             /* cells a level may have moved since the band was built */
   double step_travel;        /* ... in the last step */
@@ -91,10 +92,12 @@ void lsm_fields_destroy(lsm_fields **fields) {
 
 const char *lsm_fields_backend_name(const lsm_fields *f) { return f->name; }
 
-/* A field's cells around the band (its rim, then its ghost ring), before it is read. */
+/* A field's cells around the band (its rim, then its ghost ring where the band's stencils
+ * reach it), before it is read. */
 static lsm_status fill_around(lsm_fields *f, lsm_field field, lsm_err *err) {
-  if (f->band) LSM_TRY(f->ops->fill_rim(f->state, field, (float)f->g[field], err));
-  return f->ops->fill_ghosts(f->state, field, err);
+  if (!f->band) return f->ops->fill_ghosts(f->state, field, err);
+  LSM_TRY(f->ops->fill_rim(f->state, field, (float)f->g[field], err));
+  return f->band_edge ? f->ops->fill_ghosts(f->state, field, err) : LSM_OK;
 }
 
 lsm_status lsm_fields_cfl_dt(lsm_fields *f, lsm_scheme scheme, double cfl, double *dt,
@@ -150,8 +153,10 @@ lsm_status lsm_fields_residual(lsm_fields *f, double *norm, lsm_err *err) {
 
 lsm_status lsm_fields_phi(lsm_fields *f, const lsm_grid **phi, lsm_err *err) {
   *phi = NULL;
-  LSM_TRY(f->ops->fill_ghosts(f->state, LSM_FIELD_PHI, err));
-  if (!f->band) return f->ops->read_phi(f->state, phi, err);
+  if (!f->band) {
+    LSM_TRY(f->ops->fill_ghosts(f->state, LSM_FIELD_PHI, err));
+    return f->ops->read_phi(f->state, phi, err);
+  }
   const lsm_grid *now;
   LSM_TRY(f->ops->read_phi(f->state, &now, err));
   if (!f->view) LSM_TRY(lsm_grid_clone(now, &f->view, err));
@@ -202,6 +207,7 @@ static lsm_status band_hand_over(lsm_fields *f, lsm_err *err) {
   if (l.entered)
     LSM_TRY(f->ops->band_write(f->state, LSM_FIELD_PHI, l.enter, l.enter_value, l.entered, err));
   f->cells = (long long)l.cells;
+  f->band_edge = l.edge;
   f->travel = 0.0;
   return LSM_OK;
 }
