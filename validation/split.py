@@ -37,6 +37,15 @@ Test (frozen 2026-12-02; no rule was tuned on any of these):
   every 4th slice kept some ends have more empty kept slices beyond them
   (--ends auto then ends them at mid-gap) and some do not (the tip).
 
+The motion set (validation/motion.py, issue 53) has a split of its own, frozen
+2026-12-02 before any run looked at its test half: development = its fifteen
+named stacks (the correspondence field's constants were chosen on them);
+test = eight fresh draws of the hard kinds (a tilted and a curved tube, a
+section turning as it travels and one turning fast about a point off it, a
+hinged wall, a bifurcation and a fast split with diverging branches, a thin
+wall moving more than its thickness per gap) with sizes and speeds from seeds
+8000 onward (motion.py --split test; MOTION_TEST below).
+
 Why fresh draws rather than half of the old sets: every old stack has been
 used to choose some rule (the organ stand-ins the tip exponents and the floor,
 the analytic shapes the ends, the bunny almost everything), so no half of them
@@ -55,6 +64,9 @@ STACK_MULTIPLE = 8  # every stack with ends is 1 + a multiple of this tall
 TEST_ORGANS = 7
 TEST_SOLIDS = ["ellipsoid", "cylinder", "cone", "torus"]
 TEST_MOTIONS = ["tube", "turning", "bifurcation", "apart", "wall"]
+
+MOTION_TEST = ["t-tilted-tube", "t-curved-tube", "t-turning", "t-fast-turning", "t-hinge",
+               "t-bifurcation", "t-fast-split", "t-wall"]  # motion.py's TEST_SHAPES
 
 DEVELOPMENT = ["bunny", "organs.py organ0-organ15", "end_offsets.py / padded.py shapes",
                "motion.py", "atlas.py", "meshes.py", "ct.py"]

@@ -23,6 +23,7 @@ static const char *const time_names[] = {LSM_TIME_LIST(LSM_ENUM_TEXT)};
 static const char *const interp_names[] = {LSM_INTERP_LIST(LSM_ENUM_TEXT)};
 static const char *const ends_names[] = {LSM_ENDS_LIST(LSM_ENUM_TEXT)};
 static const char *const align_names[] = {LSM_ALIGN_LIST(LSM_ENUM_TEXT)};
+static const char *const motion_names[] = {LSM_MOTION_LIST(LSM_ENUM_TEXT)};
 static const char *const backend_names[] = {LSM_BACKEND_TABLE(LSM_BACKEND_NAME) "auto"};
 static const char *const band_names[] = {"off", "on"};
 
@@ -103,6 +104,11 @@ static const help_row reconstruct_rows[] = {
     CHOOSE("--align", align_names, "move slices by their convex-hull centroids:\n"
                                    "pairs whose shape moved (auto, the default),\n"
                                    "every pair (hull), or none"),
+    CHOOSE("--motion", motion_names, "follow structures that move, turn or branch:\n"
+                                     "each gap in the moving frame of a registration\n"
+                                     "of its two slices (field, replacing --align\n"
+                                     "auto; not with hull or --per-iteration), or\n"
+                                     "in place (none, the default)"),
     OPT("--rules-off NAME,...", "switch reconstruction rules off, for experiments\n"
                                "('lsmorph help rules' lists them)"),
     CHOOSE("--scheme", scheme_names, "numerical Hamiltonian\n"
@@ -495,6 +501,7 @@ static lsm_status reconstruct_option(arg_cursor *c, const char *name, const char
   else if (IS("--interp")) CHOICE(interp_names, so->interp);
   else if (IS("--ends")) CHOICE(ends_names, so->ends);
   else if (IS("--align")) CHOICE(align_names, so->align);
+  else if (IS("--motion")) CHOICE(motion_names, so->motion);
   else if (IS("--rules-off")) CALL(lsm_rules_switch_off(&so->rules, v, err));
   else if (IS("--threads")) INT(1, 4096, cli->threads);
   else if (IS("--max-pixels")) CALL(parse_count(name, v, "pixels", &cli->max_pixels, err));

@@ -43,6 +43,8 @@ static void write_options(FILE *f, const lsm_run_record *run) {
   lsm_json_string(f, lsm_input_name(o->input));
   fputs(", \"align\": ", f);
   lsm_json_string(f, lsm_align_name(o->align));
+  fputs(", \"motion\": ", f);
+  lsm_json_string(f, lsm_motion_name(o->motion));
   fputs(", \"interp\": ", f);
   lsm_json_string(f, lsm_interp_name(o->interp));
   fputs(", \"ends\": ", f);
@@ -150,6 +152,14 @@ static void write_pairs(FILE *f, const lsm_run_record *run) {
             json_bool(p->hit_max_iter), p->rank);
     fprintf(f, ", \"aligned\": %s, \"moving_parts\": %d", json_bool(p->aligned),
             p->moving_parts);
+    if (o->motion == LSM_MOTION_FIELD) {
+      fputs(", \"motion\": {\"max_displacement\": ", f);
+      lsm_json_number(f, p->motion_max_px);
+      fprintf(f, ", \"registration_iterations\": %d, \"registration_seconds\": ",
+              p->motion_iterations);
+      lsm_json_number(f, p->motion_seconds);
+      fputs("}", f);
+    }
     if (o->method == LSM_METHOD_PLS) {
       fprintf(f, ", \"particles\": {\"seeded\": %lld, \"discarded\": %lld, \"escaped_per_step\": ",
               p->pls_seeded, p->pls_discarded);

@@ -48,7 +48,7 @@ lsm_status lsm_emit(lsm_run *r, double z, long input_index, lsm_err *err) {
 lsm_status lsm_emit_input(lsm_run *r, const lsm_slice *s, size_t index, double z, lsm_err *err) {
   LSM_TRY(lsm_slice_phi(s, r->opts, 0, 0, r->image_phi, err));
   lsm_frame f;
-  lsm_window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}, NULL, 0.0, 0, 0};
+  lsm_window w = {{NULL, s, s, NULL}, {0.0, 0.0, 1.0, 0.0}, NULL, 0.0, 0, 0, 0};
   LSM_TRY(lsm_frame_setup(&f, &w, LSM_ALIGN_NONE, LSM_INTERP_LINEAR, r->width, r->height,
                           r->opts->pixel_dx, r->opts->pixel_dy, &r->opts->rules, err));
   f.pad = 0;

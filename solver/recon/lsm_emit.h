@@ -31,6 +31,7 @@ typedef struct lsm_run {
   int gap_workers;       /* gaps run at once (default mode) */
   lsm_pinhole_fill *fill; /* set while a gap whose slices have no hole emits */
   const lsm_specks *specks; /* set while a gap between two non-empty slices emits (ls, pls) */
+  struct lsm_flows *flows; /* the pairs' fields (--motion field), shared by the tasks */
 } lsm_run;
 
 /* LSM_ERR_INTERRUPTED once the run's stop flag (morph.stop) is set: the

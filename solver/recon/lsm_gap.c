@@ -2,6 +2,7 @@
 #include "solver/recon/lsm_gap.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "solver/recon/lsm_ends.h"
@@ -23,6 +24,45 @@ void lsm_gap_free(lsm_gap *g) {
     lsm_grid_destroy(&g->part_b[k]);
   }
   g->parts = 0;
+  if (g->moving) lsm_moving_free(&g->mv);
+  g->moving = 0;
+  lsm_grid_destroy(&g->carried);
+}
+
+const lsm_grid *lsm_gap_carry(lsm_gap *g, double s, lsm_grid *mix) {
+  if (!g->moving) return mix;
+  lsm_moving_carry(&g->mv, s, mix, g->carried);
+  return g->carried;
+}
+
+/* --motion field: phi_a, phi_b into the mid frame of the pair's field (lsm_moving), where
+ * the rules and the morph then run. */
+static lsm_status gap_moving(const lsm_stack_opts *o, int width, int height, const lsm_window *w,
+                             lsm_flows *flows, int threads, lsm_gap *g, lsm_err *err) {
+  const lsm_motion_field *field = NULL;
+  LSM_TRY(lsm_flows_get(flows, w->gap, w->s[1], w->s[2], o, width, height, threads, &field, err));
+  LSM_TRY(lsm_grid_clone(g->phi_a, &g->carried, err));
+  LSM_TRY(lsm_moving_setup(&g->mv, field, g->phi_a, g->phi_b, threads, err));
+  g->moving = 1;
+  return LSM_OK;
+}
+
+/* A neighbour's phi (side 0: the slice before A, 1: after B) pulled into the mid frame
+ * along its own pair's field. */
+static lsm_status moving_neighbour(const lsm_stack_opts *o, int width, int height,
+                                   const lsm_window *w, lsm_flows *flows, int threads, int side,
+                                   lsm_gap *g, lsm_grid *phi, lsm_err *err) {
+  const lsm_motion_field *field = NULL;
+  if (side == 0)
+    LSM_TRY(lsm_flows_get(flows, w->gap - 1, w->s[0], w->s[1], o, width, height, threads, &field,
+                          err));
+  else
+    LSM_TRY(lsm_flows_get(flows, w->gap + 1, w->s[2], w->s[3], o, width, height, threads, &field,
+                          err));
+  LSM_TRY(lsm_moving_pull_neighbour(&g->mv, field, side, phi, err));
+  const double H = w->z[2] - w->z[1], Hb = side ? w->z[3] - w->z[2] : w->z[1] - w->z[0];
+  LSM_TRY(lsm_moving_tangent(&g->mv, field, side, H, Hb, err));
+  return LSM_OK;
 }
 
 /* phi of one part on the window around it (bounding box + parts_margin_px,
@@ -125,7 +165,7 @@ void lsm_gap_paste_parts(const lsm_gap *g, double s, float *out) {
 }
 
 lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const lsm_window *w,
-                         lsm_gap *g, lsm_err *err) {
+                         lsm_flows *flows, int threads, lsm_gap *g, lsm_err *err) {
   memset(g, 0, sizeof *g);
   const lsm_slice *a = w->s[1], *b = w->s[2];
   LSM_TRY(lsm_frame_setup(&g->f, w, o->align, o->interp, width, height, o->pixel_dx,
@@ -137,7 +177,10 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
   const lsm_frame *f = &g->f;
   if (st == LSM_OK) st = lsm_slice_phi(a, o, f->pad - f->dx[1], f->pad_y - f->dy[1], g->phi_a, err);
   if (st == LSM_OK) st = lsm_slice_phi(b, o, f->pad - f->dx[2], f->pad_y - f->dy[2], g->phi_b, err);
-  if (st == LSM_OK && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
+  if (st == LSM_OK && flows && o->motion == LSM_MOTION_FIELD && !a->empty && !b->empty &&
+      !o->per_iteration && f->pad == LSM_FLOWS_PAD && f->pad_y == LSM_FLOWS_PAD)
+    st = gap_moving(o, width, height, w, flows, threads, g, err);
+  if (st == LSM_OK && !g->moving && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
       o->input == LSM_INPUT_MASK && !o->per_iteration && !f->aligned &&
       lsm_rule_on(&o->rules, LSM_RULE_MOVING_PARTS))
     st = gap_parts(o, width, height, w, g, err);
@@ -156,6 +199,8 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
     st = lsm_grid_create(nx, ny, hx, hy, &beyond[side], err);
     if (st == LSM_OK)
       st = lsm_slice_phi(w->s[k], o, f->pad - f->dx[k], f->pad_y - f->dy[k], beyond[side], err);
+    if (st == LSM_OK && g->moving)
+      st = moving_neighbour(o, width, height, w, flows, threads, side, g, beyond[side], err);
   }
   if (st == LSM_OK && caps) {
     /* both directions see the original sets: lowering phi_b inside A's

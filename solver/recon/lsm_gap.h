@@ -12,7 +12,9 @@
 
 #include "solver/base/lsm_grid.h"
 #include "solver/base/lsm_status.h"
+#include "solver/recon/lsm_flows.h"
 #include "solver/recon/lsm_frame.h"
+#include "solver/recon/lsm_moving.h"
 #include "solver/recon/lsm_parts.h"
 #include "solver/recon/lsm_slice.h"
 #include "solver/recon/lsm_stack.h"
@@ -29,12 +31,22 @@ typedef struct lsm_gap {
   int part_ax[LSM_PARTS_MAX], part_ay[LSM_PARTS_MAX], part_bx[LSM_PARTS_MAX], part_by[LSM_PARTS_MAX];
   double part_dx[LSM_PARTS_MAX], part_dy[LSM_PARTS_MAX];
   int rest_empty; /* every part of both slices moved: the rest is empty */
+  /* --motion field: phi_a, phi_b (and the neighbours read by the rules and the slopes) in
+   * the mid frame of the gap's field; each output slice carried to its place (lsm_moving) */
+  int moving;
+  lsm_moving mv;
+  lsm_grid *carried; /* an output slice carried to its fraction, on the canvas */
 } lsm_gap;
 
 /* Sets up the gap between w->s[1] (A) and w->s[2] (B) of width x height
- * slices; on failure nothing is left to free. */
+ * slices; flows: the run's fields (NULL: in place), threads for their maps.  On failure
+ * nothing is left to free. */
 lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const lsm_window *w,
-                         lsm_gap *g, lsm_err *err);
+                         lsm_flows *flows, int threads, lsm_gap *g, lsm_err *err);
+
+/* The output slice at fraction s from the gap's working result `mix` (canvas): carried to
+ * its place in the moving frame (mix is then scratch), else mix itself. */
+const lsm_grid *lsm_gap_carry(lsm_gap *g, double s, lsm_grid *mix);
 void lsm_gap_free(lsm_gap *g);
 
 /* Adds the moving parts to an output slice at fraction s (union: min). */

@@ -93,7 +93,7 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
       !lsm_mask_has_hole(&b->filled, fill.cls, fill.queue))
     r->fill = &fill;
   lsm_gap g;
-  lsm_status st = lsm_gap_setup(r->opts, r->width, r->height, w, &g, err);
+  lsm_status st = lsm_gap_setup(r->opts, r->width, r->height, w, r->flows, r->morph.threads, &g, err);
   if (st != LSM_OK) {
     r->fill = NULL;
     free(fill.cls);
@@ -103,6 +103,11 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
   ps->aligned = g.f.aligned || g.f.end_aligned; /* an end moving on with the pair beyond */
   ps->moving_parts = g.parts;
+  if (g.moving) {
+    ps->motion_iterations = g.mv.w->iterations;
+    ps->motion_seconds = g.mv.w->seconds;
+    ps->motion_max_px = g.mv.w->max_displacement;
+  }
   /* no more parts than the slices' overlap groups allow (rule one-piece; not
    * for blend, the textbook) */
   lsm_specks specks = {0, fill.cls, fill.queue};
@@ -131,7 +136,7 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
         for (int i = 0; i < mix->nx; ++i)
           LSM_AT(mix, i, j) = (1.0f - s) * LSM_AT(g.phi_a, i, j) + s * LSM_AT(g.phi_b, i, j);
       lsm_zprofile_add_cubic(g.phi_a, g.phi_b, g.slope_a, g.slope_b, fs[k], &r->opts->rules, mix);
-      lsm_frame_extract(&g.f, mix, fs[k], r->out);
+      lsm_frame_extract(&g.f, lsm_gap_carry(&g, fs[k], mix), fs[k], r->out);
       st = lsm_emit(r, zs[k], -1, err);
       ps->slices++;
     }
@@ -155,7 +160,7 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
                                   lsm_err *err) {
   const double za = w->z[1], zb = w->z[2];
   lsm_gap g;
-  LSM_TRY(lsm_gap_setup(r->opts, r->width, r->height, w, &g, err));
+  LSM_TRY(lsm_gap_setup(r->opts, r->width, r->height, w, NULL, r->morph.threads, &g, err));
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
   ps->aligned = g.f.aligned || g.f.end_aligned; /* an end moving on with the pair beyond */
   ps->moving_parts = g.parts;

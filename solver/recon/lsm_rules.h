@@ -255,7 +255,10 @@ typedef enum lsm_rule { LSM_RULE_LIST(LSM_RULE_ID) LSM_RULE_COUNT } lsm_rule;
   X(end_tip_narrow, 3.0, "end-tip-power: tip exponent of a narrowing end")                        \
   X(end_cone_from, 0.1, "end-tip-power: narrowing toward the end, (A_N - A_F) / A_F, at which "   \
                         "the tip is steepest")                                                    \
-  X(end_floor, 0.1, "end-floor: share of a tip one power lower that an end keeps")
+  X(end_floor, 0.1, "end-floor: share of a tip one power lower that an end keeps")             \
+  X(motion_sigma_field_px, 6.0, "motion: Gaussian smoothing of the field after each update, px") \
+  X(motion_sigma_update_px, 1.0, "motion: Gaussian smoothing of each update, px")                 \
+  X(motion_clip_nodes, 5.0, "motion: distances clipped to this many node spacings of a level")
 
 /* The rules switched on and the constants of a run (lsm_rules_default). */
 typedef struct lsm_rules {

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/recon/lsm_flows.h"
 #include "solver/recon/lsm_gap_run.h"
 
 lsm_output_grid lsm_output_grid_of(const double *z, size_t count, double dz) {
@@ -132,9 +133,10 @@ static lsm_status gap_task(lsm_run *r, size_t i, const gap_plan *plan, const lsm
     lsm_window w = {{s[0].loaded ? &s[0] : NULL, &s[1], &s[2], s[3].loaded ? &s[3] : NULL},
                 {i > 0 ? src->z[i - 1] : 0.0, za, zb, i + 2 < src->count ? src->z[i + 2] : 0.0},
                 farther.loaded ? &farther : NULL, farther.loaded ? src->z[m_idx] : 0.0,
-                i == 0, i + 2 == src->count};
+                i == 0, i + 2 == src->count, i};
     st = lsm_gap_run(r, &w, zs, fs, n, ps, err);
   }
+  if (r->flows) lsm_flows_gap_done(r->flows, i);
   free(zs);
   free(fs);
   for (int k = 0; k < 4; ++k) lsm_slice_free(&s[k]);
@@ -187,7 +189,7 @@ static lsm_status run_per_iteration(lsm_run *r, lsm_pair_stats *stats, lsm_err *
     st = lsm_slice_load(src, i + 1, r->width, r->height, r->opts->input, &b, err);
     if (st != LSM_OK) break;
     lsm_window w = {{NULL, &a, &b, NULL}, {0.0, src->z[i], src->z[i + 1], 0.0}, NULL, 0.0,
-                i == 0, i + 2 == src->count};
+                i == 0, i + 2 == src->count, i};
     st = lsm_gap_run_iterations(r, &w, ps, err);
     if (st == LSM_OK) st = lsm_emit_input(r, &b, i + 1, src->z[i + 1], err);
     lsm_slice_free(&a);
@@ -229,7 +231,7 @@ static void compute_gap(const lsm_run *base, size_t i, const gap_plan *plan,
     res->stats.source = i;
     res->stats.target = i + 1;
     lsm_window w = {{NULL, &a, &b, NULL}, {0.0, base->src->z[i], base->src->z[i + 1], 0.0}, NULL, 0.0,
-                i == 0, i + 2 == base->src->count};
+                i == 0, i + 2 == base->src->count, i};
     if (st == LSM_OK) st = lsm_gap_run_iterations(&task, &w, &res->stats, &e);
     if (st == LSM_OK) st = lsm_emit_input(&task, &b, i + 1, base->src->z[i + 1], &e);
     lsm_slice_free(&a);
@@ -321,6 +323,9 @@ lsm_status lsm_schedule_run(lsm_run *r, lsm_pair_stats *stats, lsm_err *err) {
       st == LSM_OK && !distributed ? lsm_schedule_gap_workers(opts, width, height, gaps, most_slices)
                                    : 1;
   r->gap_workers = workers;
+  if (st == LSM_OK && opts->motion == LSM_MOTION_FIELD)
+    st = lsm_flows_create(gaps, distributed ? opts->transport->rank : 0,
+                          distributed ? opts->transport->size : 1, &r->flows, err);
   if (st == LSM_OK && distributed) {
     st = run_distributed(r, plan, &grid, stats, err);
   } else if (st == LSM_OK && workers == 1) {
@@ -382,5 +387,6 @@ lsm_status lsm_schedule_run(lsm_run *r, lsm_pair_stats *stats, lsm_err *err) {
     lsm_slice_free(&last);
   }
   free(plan);
+  lsm_flows_destroy(&r->flows);
   return st;
 }

@@ -44,6 +44,7 @@ typedef struct lsm_window {
                              * ends (cubic; NULL elsewhere or at the stack's end) */
   double z_farther;
   int at_start, at_end; /* A is the first input slice, B the last (whether or not loaded) */
+  size_t gap;           /* the gap's index (A's input index) */
 } lsm_window;
 
 /* A neighbour takes part in the spline only if it exists and is not empty. */

@@ -87,6 +87,14 @@ LSM_ENUM(lsm_input_kind, LSM_INPUT, LSM_INPUT_LIST, lsm_input_name,
 LSM_ENUM(lsm_align, LSM_ALIGN, LSM_ALIGN_LIST, lsm_align_name,
          lsm_align_from_name);
 
+/* The correspondence field (solver/README.md §9): field, each gap in the moving frame of a
+ * symmetric diffeomorphic registration of its two slices; none, in place. */
+#define LSM_MOTION_LIST(X)                                                      \
+  X(LSM_MOTION_FIELD, "field")                                                  \
+  X(LSM_MOTION_NONE, "none")
+LSM_ENUM(lsm_motion_mode, LSM_MOTION, LSM_MOTION_LIST, lsm_motion_name,
+         lsm_motion_from_name);
+
 #define LSM_INTERP_LIST(X)                                                      \
   X(LSM_INTERP_LINEAR, "linear") /* each gap from its two slices only */        \
   X(LSM_INTERP_CUBIC, "cubic")   /* monotone cubic (PCHIP) through the four nearest slices */
@@ -111,6 +119,7 @@ typedef struct lsm_stack_opts {
   lsm_method method;
   lsm_input_kind input;
   lsm_align align;
+  lsm_motion_mode motion; /* the correspondence field (default none) */
   lsm_interp interp;   /* z-profile (default cubic) */
   lsm_end_rule ends;   /* how the cubic profile ends an object (default auto) */
   double pixel_dx;     /* physical width of a pixel: the step along a row, x (default 1) */
@@ -169,6 +178,9 @@ typedef struct lsm_pair_stats {
   int aligned;            /* 1 if the pair was hull-aligned (--align hull, or chosen by auto),
                              or the object ends in the gap moving with the aligned pair beyond */
   int moving_parts;       /* parts that moved off their place, morphed on their own (lsm_parts) */
+  int motion_iterations;  /* the registration of the pair's field: iterations at all levels */
+  double motion_seconds;  /* its time */
+  double motion_max_px;   /* the field's largest displacement, pixels (0: no field) */
   /* --method pls (both morphs of a two-sided pair added up) */
   long long pls_seeded;     /* particles seeded */
   long long pls_discarded;  /* dropped by attraction (and leaving the grid) */

@@ -119,7 +119,7 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
      * by omega(s) (rule omega), plus the spline's */
     if (g->slope_a && lsm_rule_on(rules, LSM_RULE_OMEGA)) lsm_zprofile_weight(pa, pb, fs[k], mix);
     lsm_zprofile_add_cubic(pa, pb, g->slope_a, g->slope_b, fs[k], rules, mix);
-    lsm_frame_extract(&g->f, mix, fs[k], r->out);
+    lsm_frame_extract(&g->f, lsm_gap_carry(g, fs[k], mix), fs[k], r->out);
     lsm_gap_paste_parts(g, fs[k], r->out);
     solver += lsm_run_seconds() - t0;
     st = lsm_emit(r, zs[k], -1, err);

@@ -1,0 +1,41 @@
+/* lsm_flows: the correspondence field of every pair of a run, each computed once.
+ *
+ * Gap i reads the field of its own pair (i, i + 1) and, for the cubic profile, those of the
+ * pairs beside it (i - 1, i) and (i + 1, i + 2): each field serves up to three gaps, which
+ * may run at once on different threads.  The first to ask computes it (under the pair's
+ * lock); a field is freed once every gap of this process that could read it has finished,
+ * so at most a few fields per gap in flight are held.  With MPI each process keeps its own.
+ */
+#ifndef LSM_FLOWS_H
+#define LSM_FLOWS_H
+
+#include <stddef.h>
+
+#include "solver/base/lsm_status.h"
+#include "solver/motion/lsm_motion.h"
+#include "solver/recon/lsm_slice.h"
+#include "solver/recon/lsm_stack.h"
+
+typedef struct lsm_flows lsm_flows;
+
+/* The cache of a stack of pairs + 1 slices whose gaps g with g % size == rank run here. */
+lsm_status lsm_flows_create(size_t pairs, int rank, int size, lsm_flows **out, lsm_err *err);
+void lsm_flows_destroy(lsm_flows **flows);
+
+/* The margin of the canvas the fields are computed on (an unaligned gap's). */
+#define LSM_FLOWS_PAD 2
+
+/* The field of pair `pair`, a and b its two slices (loaded), on the canvas of an unaligned
+ * gap (width + 2 LSM_FLOWS_PAD by height + 2 LSM_FLOWS_PAD); computed on first use with
+ * `threads` threads.  Valid until the gaps that read it are done. */
+lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
+                         const lsm_stack_opts *o, int width, int height, int threads,
+                         const lsm_motion_field **field, lsm_err *err);
+
+/* Gap `gap` has finished (also on failure): fields nobody here will read again are freed. */
+void lsm_flows_gap_done(lsm_flows *flows, size_t gap);
+
+/* The registration's constants of a run (the rules table's motion_* constants). */
+void lsm_flows_params(const lsm_stack_opts *o, lsm_motion_params *p);
+
+#endif
