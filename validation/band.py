@@ -27,7 +27,6 @@ import motion
 import organs
 import padded
 import split
-import vlib
 
 
 def volume(out):
@@ -40,14 +39,7 @@ def volume(out):
 
 def compare(lsm, stack, k, extra, work):
     """Scores with the band on and off and the voxels that change sides."""
-    tdir, kdir = os.path.join(work, "truth"), os.path.join(work, "kept")
-    for d in (tdir, kdir):
-        shutil.rmtree(d, ignore_errors=True)
-        os.makedirs(d)
-    for i, sl in enumerate(stack):
-        vlib.write_mask(os.path.join(tdir, "%04d.png" % (i + 1)), sl)
-        if i % k == 0:
-            vlib.write_mask(os.path.join(kdir, "%04d.png" % (i + 1)), sl)
+    tdir, kdir = eo.write_truth_and_kept(stack, k, work)
     got = {}
     for band in ("off", "on"):
         out = os.path.join(work, band)

@@ -139,10 +139,10 @@ def pchip_reference(stack, k, empty_rule):
     return result
 
 
-def score_stack(lsm, stack, k, methods, extra, work, reference=pchip_reference):
-    """`lsmorph score` of every method on a truth stack, every k-th slice kept:
-    {method: score JSON}.  reference(stack, k, rule) gives the pchip-RULE rows."""
-    tdir, kdir, odir = (os.path.join(work, d) for d in ("truth", "kept", "out"))
+def write_truth_and_kept(stack, k, work):
+    """Writes a truth stack into WORK/truth and its every k-th slice into WORK/kept (both emptied
+    first), numbered from 0001: (truth folder, kept folder)."""
+    tdir, kdir = os.path.join(work, "truth"), os.path.join(work, "kept")
     for d in (tdir, kdir):
         shutil.rmtree(d, ignore_errors=True)
         os.makedirs(d)
@@ -150,6 +150,14 @@ def score_stack(lsm, stack, k, methods, extra, work, reference=pchip_reference):
         vlib.write_mask(os.path.join(tdir, "%04d.png" % (i + 1)), sl)
         if i % k == 0:
             vlib.write_mask(os.path.join(kdir, "%04d.png" % (i + 1)), sl)
+    return tdir, kdir
+
+
+def score_stack(lsm, stack, k, methods, extra, work, reference=pchip_reference):
+    """`lsmorph score` of every method on a truth stack, every k-th slice kept:
+    {method: score JSON}.  reference(stack, k, rule) gives the pchip-RULE rows."""
+    tdir, kdir = write_truth_and_kept(stack, k, work)
+    odir = os.path.join(work, "out")
     scores = {}
     for method in methods:
         shutil.rmtree(odir, ignore_errors=True)
