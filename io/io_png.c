@@ -386,15 +386,19 @@ static lsm_status png_read_common(const char *path, png_reader *r, lsm_err *err)
   return st;
 }
 
-lsm_status lsm_png_read_mask(const char *path, const lsm_image_read_opts *opts,
-                             lsm_mask *out, lsm_err *err) {
-  png_reader r;
-  r.opts = opts;
-  r.header_only = 0;
+/* A reader of a whole mask into *out (emptied first, when given). */
+static png_reader mask_reader(const lsm_image_read_opts *opts, lsm_mask *out) {
+  png_reader r = {.opts = opts, .header_only = 0};
   if (out) {
     out->width = out->height = 0;
     out->pixels = NULL;
   }
+  return r;
+}
+
+lsm_status lsm_png_read_mask(const char *path, const lsm_image_read_opts *opts,
+                             lsm_mask *out, lsm_err *err) {
+  png_reader r = mask_reader(opts, out);
   if (!out) return lsm_fail(err, LSM_ERR_INTERNAL, path, "no output mask given");
   lsm_status st = png_read_common(path, &r, err);
   if (st == LSM_OK) *out = r.mask;
@@ -403,13 +407,7 @@ lsm_status lsm_png_read_mask(const char *path, const lsm_image_read_opts *opts,
 
 lsm_status lsm_png_read_mask_stream(FILE *fp, const char *name, const lsm_image_read_opts *opts,
                                     lsm_mask *out, lsm_err *err) {
-  png_reader r;
-  r.opts = opts;
-  r.header_only = 0;
-  if (out) {
-    out->width = out->height = 0;
-    out->pixels = NULL;
-  }
+  png_reader r = mask_reader(opts, out);
   if (!out || !fp) return lsm_fail(err, LSM_ERR_INTERNAL, name, "bad arguments to the PNG reader");
   lsm_status st = png_read_stream(fp, name, &r, err);
   if (st == LSM_OK) *out = r.mask;
