@@ -6,7 +6,8 @@
   so that the dependency is visible where it is made (the OpenCL-compiled kernels/
   headers, which the OpenCL compiler reads beside each other, excepted);
 - no source file in solver/, kernels/ or io/ is over 800 lines;
-- nothing refers to a folder outside the repository ("../shared").
+- nothing refers to the shared folder beside the repository (a parent-relative path to
+  it: the repository must stand alone).
 
     /usr/bin/python3 tests/check_house.py [ROOT]
 
@@ -18,6 +19,9 @@ import subprocess
 import sys
 
 MAX_LINES = 800
+# The folder beside the repository that nothing may use (spelled in parts so that this
+# file does not name it itself).
+OUTSIDE = "/".join(["..", "shared"])
 SOURCE_ROOTS = ("solver/", "kernels/", "io/")
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 
@@ -74,14 +78,14 @@ def main():
     for cycle in cycles(graph):
         problems.append("include cycle between rooms: " + " -> ".join(cycle))
     for f in files:
-        if f == "tests/check_house.py" or f.endswith((".png", ".tif", ".tiff", ".nrrd", ".gz")):
+        if f.endswith((".png", ".tif", ".tiff", ".nrrd", ".gz")):
             continue
         try:
             text = open(os.path.join(root, f), encoding="utf-8").read()
         except (UnicodeDecodeError, OSError):
             continue
-        if "../shared" in text:
-            problems.append("%s: refers to ../shared, a folder outside the repository" % f)
+        if OUTSIDE in text:
+            problems.append("%s: refers to %s, a folder outside the repository" % (f, OUTSIDE))
     for p in problems:
         print("house: " + p)
     if problems:
