@@ -15,12 +15,7 @@
 #include <time.h>
 
 #include "solver/pde/lsm_morph.h"
-
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "tests/bench_clock.h"
 
 int main(int argc, char **argv) {
   int threads = argc > 1 ? atoi(argv[1]) : 1;
@@ -59,13 +54,13 @@ int main(int argc, char **argv) {
         o.threads = threads;
         o.track_cp = 0;
         lsm_morph *m = NULL;
-        const double t0 = now();
+        const double t0 = bench_now();
         if (lsm_morph_create(phi, target, &o, &m, &err) != LSM_OK ||
             lsm_morph_advance_to(m, log(4.0), 1000000, &err) != LSM_OK) {
           fprintf(stderr, "bench_morph: error: %s\n", err.msg);
           return 1;
         }
-        const double sec = now() - t0;
+        const double sec = bench_now() - t0;
         if (sec < best) best = sec;
         steps = lsm_morph_iterations(m);
         updates = lsm_morph_cell_updates(m);

@@ -13,12 +13,7 @@
 #include <time.h>
 
 #include "solver/pde/lsm_scheme.h"
-
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "tests/bench_clock.h"
 
 int main(int argc, char **argv) {
   int threads = argc > 1 ? atoi(argv[1]) : 1;
@@ -51,10 +46,10 @@ int main(int argc, char **argv) {
       lsm_scheme_stage((lsm_scheme)scheme, out, phi, phi, target, 0.0f, 1.0f, (float)dt, threads);
       double best = INFINITY;
       for (int block = 0; block < 5; ++block) {
-        double t0 = now();
+        double t0 = bench_now();
         for (int r = 0; r < reps; ++r)
           lsm_scheme_stage((lsm_scheme)scheme, out, phi, phi, target, 0.0f, 1.0f, (float)dt, threads);
-        double sec = now() - t0;
+        double sec = bench_now() - t0;
         if (sec < best) best = sec;
       }
       printf("%s %d %d %.4g\n", lsm_scheme_name((lsm_scheme)scheme), n, threads,
