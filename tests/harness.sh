@@ -4,7 +4,8 @@
 # need_python (modules Debian's Python must import), run_checks (a helper
 # printing "ok - " / "FAIL - " lines, counted), make_tmp (a temporary folder
 # $TMP removed on exit), work_in_tmp (make_tmp, then cd into it) and
-# lib_python (how to run Python over liblsmorph.so).
+# lib_python (how to run Python over liblsmorph.so), python_suite (the set-up of the suites
+# that drive lsmorph from Python).
 
 pass=0
 fail=0
@@ -71,4 +72,15 @@ lib_python() { # lib_python LIBRARY: after make_tmp, sets PYLIB (run it for $PY)
     chmod +x "$PYLIB"
     SANFLAGS="-fsanitize=address,undefined"
   fi
+}
+
+python_suite() { # python_suite MODULES PACKAGES: after BUILD, LSM, PY and SUITE are set: needs
+  # lsmorph and the Python modules (from those Debian packages), makes $TMP, sets HERE (the
+  # tests folder) and makes BUILD and LSM absolute paths.
+  need "$LSM"
+  need_python "$1" "$2"
+  make_tmp
+  HERE="$(cd "$(dirname "$0")" && pwd)"
+  case $BUILD in /*) ;; *) BUILD="$PWD/$BUILD" ;; esac
+  case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
 }

@@ -16,11 +16,7 @@ LSM="$BUILD/lsmorph"
 PY=/usr/bin/python3
 SUITE=fill
 . "$(dirname "$0")/harness.sh"
-need "$LSM"
-need_python "nibabel, numpy, vtk" "python3-nibabel, python3-numpy, python3-vtk9"
-make_tmp
-case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
-HERE="$(cd "$(dirname "$0")" && pwd)"
+python_suite "nibabel, numpy, vtk" "python3-nibabel, python3-numpy, python3-vtk9"
 
 # The volumes: $TMP/truth.nii.gz (every slice) and the drawn ones in every format
 "$PY" "$HERE/fill_check.py" make "$TMP" >"$TMP/make.log" 2>&1 || { bad "making the volumes: $(tail -3 "$TMP/make.log")"; finish; }

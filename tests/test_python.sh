@@ -12,12 +12,7 @@ LSM="$BUILD/lsmorph"
 PY=/usr/bin/python3
 SUITE=python
 . "$(dirname "$0")/harness.sh"
-need "$LSM"
-need_python "nibabel, numpy" "python3-nibabel, python3-numpy"
-make_tmp
-HERE="$(cd "$(dirname "$0")" && pwd)"
-case $BUILD in /*) ;; *) BUILD="$PWD/$BUILD" ;; esac
-case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
+python_suite "nibabel, numpy" "python3-nibabel, python3-numpy"
 [ -f "$BUILD/python/lsmorph/__init__.py" ] || { bad "$BUILD/python/lsmorph is missing (make builds it)"; finish; }
 lib_python "$BUILD/liblsmorph.so"
 

@@ -13,11 +13,7 @@ LSM="$BUILD/lsmorph"
 PY=/usr/bin/python3
 SUITE=slicer
 . "$(dirname "$0")/harness.sh"
-need "$LSM"
-need_python "nibabel, numpy" "python3-nibabel, python3-numpy"
-make_tmp
-HERE="$(cd "$(dirname "$0")" && pwd)"
-case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
+python_suite "nibabel, numpy" "python3-nibabel, python3-numpy"
 
 "$LSM" --xml >"$TMP/a.xml" 2>"$TMP/e"
 check "lsmorph --xml: exit 0" [ $? -eq 0 ]

@@ -11,12 +11,7 @@ LSM="$BUILD/lsmorph"
 PY=/usr/bin/python3
 SUITE=sparse-labels
 . "$(dirname "$0")/harness.sh"
-need "$LSM"
-need_python "nibabel, numpy" "python3-nibabel, python3-numpy"
-make_tmp
-HERE="$(cd "$(dirname "$0")" && pwd)"
-case $BUILD in /*) ;; *) BUILD="$PWD/$BUILD" ;; esac
-case $LSM in /*) ;; *) LSM="$PWD/$LSM" ;; esac
+python_suite "nibabel, numpy" "python3-nibabel, python3-numpy"
 SCRIPT="$HERE/../examples/sparse_labels.py"
 lib_python "$BUILD/liblsmorph.so"
 "$PY" "$HERE/fill_check.py" make "$TMP" >"$TMP/make.log" 2>&1 || { bad "making the volumes"; finish; }
