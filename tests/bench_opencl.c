@@ -18,13 +18,12 @@
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 
+#include "solver/base/lsm_clock.h"
 #include "solver/pde/lsm_backend.h"
 #include "solver/pde/lsm_fields.h"
 #include "solver/pde/lsm_morph.h"
 #include "solver/pde/lsm_scheme.h"
-#include "tests/bench_clock.h"
 
 static int die(const lsm_err *err) {
   fprintf(stderr, "bench_opencl: error: %s\n", err->msg);
@@ -47,10 +46,10 @@ static void fill(lsm_grid *phi, lsm_grid *target) {
 static double stage_c(lsm_grid *phi, lsm_grid *target, lsm_grid *out, int threads, int reps,
                       float dt) {
   lsm_scheme_stage(LSM_SCHEME_UPWIND, out, phi, phi, target, 0.0f, 1.0f, dt, threads);
-  double t0 = bench_now();
+  double t0 = lsm_clock_seconds();
   for (int r = 0; r < reps; ++r)
     lsm_scheme_stage(LSM_SCHEME_UPWIND, out, phi, phi, target, 0.0f, 1.0f, dt, threads);
-  return bench_now() - t0;
+  return lsm_clock_seconds() - t0;
 }
 
 static lsm_status stage_cl(const lsm_backend *b, lsm_grid *phi, lsm_grid *target, int reps,
@@ -60,11 +59,11 @@ static lsm_status stage_cl(const lsm_backend *b, lsm_grid *phi, lsm_grid *target
   LSM_TRY(lsm_fields_create(b, phi, target, 1, &f, err));
   lsm_status s = lsm_fields_step(f, LSM_SCHEME_UPWIND, LSM_TIME_EULER, dt, err);
   if (s == LSM_OK) s = lsm_fields_residual(f, &res, err);
-  double t0 = bench_now();
+  double t0 = lsm_clock_seconds();
   for (int r = 0; r < reps && s == LSM_OK; ++r)
     s = lsm_fields_step(f, LSM_SCHEME_UPWIND, LSM_TIME_EULER, dt, err);
   if (s == LSM_OK) s = lsm_fields_residual(f, &res, err); /* waits for the queue */
-  *sec = bench_now() - t0;
+  *sec = lsm_clock_seconds() - t0;
   lsm_fields_destroy(&f);
   return s;
 }
@@ -76,14 +75,14 @@ static lsm_status pair(const lsm_grid *a, const lsm_grid *b, const lsm_backend *
   o.threads = threads;
   o.backend = backend;
   lsm_morph *m = NULL;
-  double t0 = bench_now();
+  double t0 = lsm_clock_seconds();
   LSM_TRY(lsm_morph_create(a, b, &o, &m, err));
   lsm_status s = LSM_OK;
   for (int k = 0; k < steps && s == LSM_OK; ++k) s = lsm_morph_step(m, INFINITY, err);
   if (s == LSM_OK && !lsm_morph_phi(m))
     s = lsm_fail(err, lsm_morph_error(m)->status, NULL, "%s", lsm_morph_error(m)->msg);
   lsm_morph_destroy(&m);
-  *sec = bench_now() - t0;
+  *sec = lsm_clock_seconds() - t0;
   return s;
 }
 

@@ -11,8 +11,8 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "solver/base/lsm_clock.h"
 #include "solver/base/lsm_grid.h" /* LSM_GHOST */
 #include "solver/pde/lsm_band.h"  /* LSM_BAND_SEGMENT */
 #include "lsm_kernels.h" /* lsm_kernel_source[]: morph.cl + the headers, NUL-terminated */
@@ -104,12 +104,6 @@ lsm_status lsm_cl_status_of(cl_int code) {
 lsm_status lsm_cl_fail(lsm_err *err, const char *device, const char *call, cl_int code) {
   return lsm_fail(err, lsm_cl_status_of(code), NULL, "OpenCL: %s: %s failed: %s (%d)", device, call,
                   lsm_cl_error_name(code), (int)code);
-}
-
-static double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 /* ---- device enumeration ---------------------------------------------------------------- */
@@ -422,9 +416,9 @@ lsm_status lsm_cl_context_open(int device, void **ctx, lsm_err *err) {
              (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? " -cl-fp32-correctly-rounded-divide-sqrt"
                                                         : "",
              c->cpu ? " -DLSM_CL_SERIAL_COMBINE" : "");
-    const double t0 = now_seconds();
+    const double t0 = lsm_clock_seconds();
     st = program_from_source(c, options, err);
-    c->build_seconds = now_seconds() - t0;
+    c->build_seconds = lsm_clock_seconds() - t0;
   }
   if (st == LSM_OK) st = kernel_group_limit(c, err);
   if (st == LSM_OK) pick_local(c);

@@ -1,14 +1,9 @@
 #include "solver/app/lsm_progress_bar.h"
 
 #include <stdio.h>
-#include <time.h>
 #include <unistd.h>
 
-double lsm_wall_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "solver/base/lsm_clock.h"
 
 static void progress_update(void *ctx, size_t done, size_t total, size_t pair, size_t pairs) {
   lsm_progress_bar *p = ctx;
@@ -18,7 +13,7 @@ static void progress_update(void *ctx, size_t done, size_t total, size_t pair, s
     return;
   }
   int percent = (int)(100.0 * (double)done / (double)total);
-  double elapsed = lsm_wall_seconds() - p->start;
+  double elapsed = lsm_clock_seconds() - p->start;
   if (p->tty) {
     char bar[41];
     int fill = percent * 40 / 100;

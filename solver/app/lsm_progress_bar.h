@@ -8,13 +8,10 @@
 typedef struct lsm_progress_bar {
   int tty;          /* stderr is a terminal */
   int last_percent; /* the last percentage shown (-1: none yet) */
-  double start;     /* lsm_wall_seconds() when the run began */
+  double start;     /* lsm_clock_seconds() when the run began */
 } lsm_progress_bar;
 
-/* Seconds on a monotonic clock (differences only). */
-double lsm_wall_seconds(void);
-
-/* The progress callback of a run that began at start (lsm_wall_seconds);
+/* The progress callback of a run that began at start (lsm_clock_seconds);
  * *bar holds its state and must outlive the run. */
 lsm_progress lsm_progress_bar_start(lsm_progress_bar *bar, double start);
 

@@ -17,6 +17,7 @@
 #include "solver/app/lsm_progress_bar.h"
 #include "solver/app/lsm_run_json.h"
 #include "solver/app/lsm_signals.h"
+#include "solver/base/lsm_clock.h"
 #include "solver/pde/lsm_backend.h"
 #include "solver/recon/lsm_stack.h"
 
@@ -201,14 +202,14 @@ static void report_result(const lsm_cli *cli, const lsm_slice_files *src, const 
   size_t nfiles = lsm_output_file_names(cli, files, 16);
   fprintf(stderr, "lsmorph: wrote %zu slices to %s (", out->count, cli->out_dir);
   for (size_t k = 0; k < nfiles && k < 16; ++k) fprintf(stderr, "%s%s", k ? ", " : "", files[k]);
-  fprintf(stderr, ") in %.2f s\n", lsm_wall_seconds() - t_start);
+  fprintf(stderr, ") in %.2f s\n", lsm_clock_seconds() - t_start);
 }
 
 lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *mpi,
                            lsm_err *err) {
   if (lsm_mpi_rank(mpi) != 0) return reconstruct_worker(cli, lsm_mpi_transport(mpi), err);
   cli->stack.transport = lsm_mpi_transport(mpi);
-  const double t_start = lsm_wall_seconds();
+  const double t_start = lsm_clock_seconds();
   lsm_slice_files src = {NULL, 0, {cli->invert, cli->max_pixels, 0}, NULL};
   double *z = NULL;
   int width = 0, height = 0;
@@ -278,7 +279,7 @@ lsm_status lsm_reconstruct(int argc, char **argv, lsm_cli *cli, const lsm_mpi *m
                                 .stats = stats,
                                 .threads = threads,
                                 .backend = backend,
-                                .wall_seconds = lsm_wall_seconds() - t_start};
+                                .wall_seconds = lsm_clock_seconds() - t_start};
     st = lsm_run_json_write(path, &run, err);
   }
   if (st == LSM_OK) st = lsm_signals_check(err); /* a signal now still means no result */

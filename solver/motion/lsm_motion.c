@@ -4,9 +4,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "kernels/lsm_motion_cell.h"
+#include "solver/base/lsm_clock.h"
 
 void lsm_motion_params_default(lsm_motion_params *p) {
   memset(p, 0, sizeof *p);
@@ -22,12 +22,6 @@ void lsm_motion_params_default(lsm_motion_params *p) {
   p->sigma_field_px = 6.0;
   p->stop_window = 5;
   p->stop_drop = 0.01;
-}
-
-static double seconds_now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 /* Threads worth using on n nodes (below 2^16 a parallel region costs more than it saves). */
@@ -238,7 +232,7 @@ lsm_status lsm_motion_field_zero(const lsm_grid *phi, int step, lsm_motion_field
 lsm_status lsm_motion_register(const lsm_grid *phi_a, const lsm_grid *phi_b,
                                const lsm_motion_params *p, int threads, lsm_motion_field **out,
                                lsm_err *err) {
-  const double t0 = seconds_now();
+  const double t0 = lsm_clock_seconds();
   *out = NULL;
   const int levels = p->levels < 1 ? 1 : p->levels > LSM_MOTION_LEVELS_MAX ? LSM_MOTION_LEVELS_MAX
                                                                            : p->levels;
@@ -291,7 +285,7 @@ lsm_status lsm_motion_register(const lsm_grid *phi_a, const lsm_grid *phi_b,
   }
   free(pool);
   if (st != LSM_OK) lsm_motion_field_destroy(out);
-  else f->seconds = seconds_now() - t0;
+  else f->seconds = lsm_clock_seconds() - t0;
   return st;
 }
 

@@ -2,15 +2,9 @@
 #include "solver/recon/lsm_emit.h"
 
 #include <math.h>
-#include <time.h>
 
+#include "solver/base/lsm_clock.h"
 #include "solver/recon/lsm_frame.h"
-
-double lsm_run_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* A sample of exactly 0 lies on the surface and counts as inside (phi <= 0,
  * as the masks draw it); interpolating half-pixel distances makes whole rows

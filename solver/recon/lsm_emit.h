@@ -46,7 +46,5 @@ lsm_status lsm_emit(lsm_run *r, double z, long input_index, lsm_err *err);
 /* Emits input slice s (index `index`) at height z: its own phi. */
 lsm_status lsm_emit_input(lsm_run *r, const lsm_slice *s, size_t index, double z, lsm_err *err);
 
-/* Monotonic clock, seconds (the solver time in run.json). */
-double lsm_run_seconds(void);
 
 #endif

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "solver/base/lsm_clock.h"
 #include "solver/recon/lsm_ends.h"
 #include "solver/recon/lsm_park.h"
 #include "solver/recon/lsm_pinholes.h"
@@ -173,7 +174,7 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
   const int cap = w->s[1]->empty != w->s[2]->empty;
   const lsm_grid *from = reverse ? g.phi_b : g.phi_a, *to = reverse ? g.phi_a : g.phi_b;
   lsm_morph *m = NULL;
-  const double t0 = lsm_run_seconds();
+  const double t0 = lsm_clock_seconds();
   lsm_status st = lsm_morph_create(from, to, &r->morph, &m, err);
   int k = 0;
   const int still = st == LSM_OK && !isfinite(lsm_morph_dt(m)); /* nothing can move */
@@ -196,14 +197,14 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
     ps->hit_max_iter = k >= r->opts->max_iter && lsm_morph_cp(m) > r->opts->tol;
   }
   lsm_morph_destroy(&m);
-  double solver = lsm_run_seconds() - t0;
+  double solver = lsm_clock_seconds() - t0;
   const size_t cells = (size_t)r->width * (size_t)r->height;
   lsm_park *park = NULL;
   if (st == LSM_OK && reverse && k > 0)
     st = lsm_park_open(cells, (size_t)k, r->opts->held_max, &park, err);
   if (st == LSM_OK && k > 0) st = lsm_morph_create(from, to, &r->morph, &m, err);
   for (int n = 1; st == LSM_OK && n <= k; ++n) {
-    double t1 = lsm_run_seconds();
+    double t1 = lsm_clock_seconds();
     st = lsm_run_check_stop(r, err);
     if (st == LSM_OK) st = lsm_morph_step(m, INFINITY, err);
     if (st != LSM_OK) break;
@@ -216,7 +217,7 @@ lsm_status lsm_gap_run_iterations(lsm_run *r, const lsm_window *w, lsm_pair_stat
       break;
     }
     lsm_frame_extract(&g.f, pm, s, r->out);
-    solver += lsm_run_seconds() - t1;
+    solver += lsm_clock_seconds() - t1;
     if (reverse) {
       /* iterate n is output k - n: park it in slot k - n */
       st = lsm_park_put(park, (size_t)(k - n), r->out, err);

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "kernels/lsm_cell.h"
+#include "solver/base/lsm_clock.h"
 #include "solver/recon/lsm_frame.h"
 #include "solver/recon/lsm_park.h"
 #include "solver/recon/lsm_pinholes.h"
@@ -57,7 +58,7 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
   float *row = NULL;
   uint8_t *pinhole = NULL; /* NULL where neither slice has a pinhole */
   lsm_park *park = NULL;
-  double t0 = lsm_run_seconds(), solver = 0.0;
+  double t0 = lsm_clock_seconds(), solver = 0.0;
   lsm_status st = lsm_morph_create(pb, pa, mo, &rev, err);
   if (st == LSM_OK) st = lsm_grid_clone(pa, &mix, err);
   if (st == LSM_OK && !(row = lsm_alloc(cells, sizeof(float), err, "morph snapshot")))
@@ -121,9 +122,9 @@ lsm_status lsm_two_sided_run(lsm_run *r, lsm_gap *g, const double *zs, const dou
     lsm_zprofile_add_cubic(pa, pb, g->slope_a, g->slope_b, fs[k], rules, mix);
     lsm_frame_extract(&g->f, lsm_gap_carry(g, fs[k], mix), fs[k], r->out);
     lsm_gap_paste_parts(g, fs[k], r->out);
-    solver += lsm_run_seconds() - t0;
+    solver += lsm_clock_seconds() - t0;
     st = lsm_emit(r, zs[k], -1, err);
-    t0 = lsm_run_seconds();
+    t0 = lsm_clock_seconds();
     ps->slices++;
   }
   lsm_pair_stats_add_pls(ps, fwd);
