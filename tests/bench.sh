@@ -2,7 +2,8 @@
 # make bench: speed of the upwind update against NumPy, Roe-Fix, threads,
 # peak memory of a reconstruction with 10 and 60 slices, the share of the
 # previews and slice PNGs in a default run, the narrow band against the full
-# grid (tests/bench_morph.c, tests/bench_band.py), and lsmorph fill on a
+# grid (tests/bench_morph.c, tests/bench_band.py), --motion field against none
+# (tests/bench_motion.py: the 2x bound, the registration's cells/s), and lsmorph fill on a
 # 512 x 512 x 200 label map against ITK's MorphologicalContourInterpolator.
 set -eu
 BUILD=${1:-build}
@@ -75,6 +76,11 @@ MCI_DIR=${LSMORPH_MESH_CACHE:-$HOME/.cache/lsmorph-meshes}/mci
 [ -f "$MCI_DIR/mci.mjs" ] && command -v node >/dev/null 2>&1 || MCI_DIR=
 $PY tests/bench_band.py "$BUILD/lsmorph" "$BUILD/bench-band" \
   ${LSMORPH_BENCH_BASE:+--base "$LSMORPH_BENCH_BASE"} ${MCI_DIR:+--mci "$MCI_DIR"}
+
+echo
+echo "== the correspondence field (--motion field against none; issue 53) =="
+# the bunny every 8th slice and the two 512^2 stand-ins bench_band.py made
+$PY tests/bench_motion.py "$BUILD/lsmorph" "$TMP/bunny8" "$BUILD"/bench-band/512/*/kept
 
 echo
 sh tests/bench_fill.sh "$BUILD"
