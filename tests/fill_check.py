@@ -116,6 +116,8 @@ def make(d):
     half = drawn.astype(np.float32)
     half[30, 20, 8] = 2.5
     nib.save(nib.Nifti1Image(half, aff), os.path.join(d, "half.nii"))
+    far = np.diag([1e29, 1.0, 2.0, 1.0])  # 1e29 per voxel: the volume spans more than 1e30
+    nib.save(nib.Nifti1Image(drawn, far), os.path.join(d, "far.nii"))
     one = np.zeros_like(lab)
     one[:, :, 20] = lab[:, :, 20]
     nib.save(nib.Nifti1Image(one, aff), os.path.join(d, "one.nii.gz"))

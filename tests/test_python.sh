@@ -57,6 +57,14 @@ try:
     report(False, "fill: one drawn slice raises lsmorph.Error")
 except lsmorph.Error as e:
     report(e.status == 2, "fill: one drawn slice raises lsmorph.Error (%s)" % e)
+one = np.zeros_like(drawn)
+one[:, :, 20] = drawn[:, :, 20]
+for order in ("F", "C"):  # the axis named as the caller sees it, whatever the memory order
+    try:
+        lsmorph.fill(np.asarray(one, order=order), spacing=spacing)
+        report(False, "fill: one drawn slice across k (%s order) raises lsmorph.Error" % order)
+    except lsmorph.Error as e:
+        report("across k only slice 20" in str(e), "fill: one drawn slice, %s order: the message names k (%s)" % (order, e))
 for bad, kind in ((drawn.astype(np.float32), TypeError), (drawn[0], ValueError)):
     try:
         lsmorph.fill(bad)

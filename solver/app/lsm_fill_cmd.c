@@ -465,11 +465,13 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
   lsm_progress progress = {&fp, fill_progress_update};
   o.progress = quiet ? NULL : &progress;
   lsm_fill_plan *plan = NULL;
-  if (st == LSM_OK) st = lsm_fill_plan_make(v, &o, &plan, err);
-  if (st != LSM_OK && err && strncmp(err->msg, "--", 2) != 0) {
-    char what[LSM_ERR_MSG_MAX];
-    snprintf(what, sizeof what, "%s", err->msg);
-    snprintf(err->msg, sizeof err->msg, "%s: %.900s", a->labels_path, what);
+  if (st == LSM_OK) {
+    st = lsm_fill_plan_make(v, &o, &plan, err);
+    if (st != LSM_OK && err && strncmp(err->msg, "--", 2) != 0) { /* the plan names no file */
+      char what[LSM_ERR_MSG_MAX];
+      snprintf(what, sizeof what, "%s", err->msg);
+      snprintf(err->msg, sizeof err->msg, "%s: %.900s", a->labels_path, what);
+    }
   }
   if (st == LSM_OK && !quiet) {
     print_notes(plan, v, a, a->labels_path);

@@ -296,6 +296,14 @@ lsm_status lsm_fill_plan_make(const lsm_voxels *v, const lsm_fill_opts *o, lsm_f
     return lsm_fail(err, LSM_ERR_INPUT, NULL,
                     "the volume holds %s values: labels are integers (convert it first)",
                     lsm_voxel_type_name(v->type));
+  for (int a = 0; a < 3; ++a) /* lengths the floats of the run hold */
+    if (!lsm_length_in_range(v->spacing[a]) || !lsm_length_in_range(v->spacing[a] * (double)v->n[a]))
+      return lsm_fail(err, LSM_ERR_INPUT, NULL,
+                      "the voxel spacing along %c is %g, and %zu voxels span %g: outside %g to "
+                      "%g (lengths are held as floats; write the volume in a unit that brings "
+                      "them into range)",
+                      axis_name[a], v->spacing[a], v->n[a], v->spacing[a] * (double)v->n[a],
+                      LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   size_t count = 0;
   LSM_TRY(lsm_voxels_count(v->n, v->type, &count, NULL, err));
   const int axis = o->axis >= 0 && o->axis < 3 ? o->axis : lsm_fill_default_axis(v->spacing);

@@ -15,6 +15,7 @@ build/python/lsmorph), else where ``make install`` put it, else on the system's 
 import ctypes
 import ctypes.util
 import os
+import re
 
 import numpy as np
 
@@ -105,9 +106,15 @@ def _options(options):
     return o, keep
 
 
-def _check(status, message):
+def _check(status, message, turned=False):
+    """Raises Error for a failed call; turned: the library saw the axes reversed (a C-ordered
+    array as [k, j, i]), so its axis names are turned back into the caller's."""
     if status != 0:
-        raise Error(status, message.value.decode(errors="replace") or "lsmorph: error %d" % status)
+        text = message.value.decode(errors="replace") or "lsmorph: error %d" % status
+        if turned:
+            text = re.sub(r"\b(across|along|--axis) ([ijk])\b",
+                          lambda m: "%s %s" % (m.group(1), "kji"["ijk".index(m.group(2))]), text)
+        raise Error(status, text)
 
 
 def fill(labels, spacing=(1.0, 1.0, 1.0), axis=None, slices=None, fill_labels=None, out=None,
@@ -175,7 +182,7 @@ def fill(labels, spacing=(1.0, 1.0, 1.0), axis=None, slices=None, fill_labels=No
         None if chosen is None else chosen.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
         0 if chosen is None else chosen.size, ctypes.byref(o), ctypes.byref(filled), message,
         len(message))
-    _check(status, message)
+    _check(status, message, not work.flags.f_contiguous)
     if work is not out:
         out[...] = work
     return out
