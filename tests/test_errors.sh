@@ -105,6 +105,9 @@ mkdir textonly && echo "not slices" >textonly/notes.txt
 expect "folder without PNG files" 1 "textonly: no PNG or TIFF files" out reconstruct textonly -o out -q
 echo "a file" >afile
 expect "SLICE_DIR is a file" 1 "afile: not a folder" out reconstruct afile -o out -q
+echo "a label volume" >seg.nii.gz
+expect "SLICE_DIR is a label volume" 1 "seg.nii.gz: not a folder (a label volume? 'lsmorph fill seg.nii.gz -o OUT'" out reconstruct seg.nii.gz -o out -q
+expect "a label volume as the command" 2 "to fill a label volume, 'lsmorph fill seg.nii.gz -o OUT'" - seg.nii.gz
 mkdir one && cp good/1.png one/
 expect "a single slice" 1 "one: only one slice" out reconstruct one -o out -q
 mkdir linked && cp good/1.png good/3.png linked/ && ln -s nothing-here.png linked/2.png

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/lsm_labels.h"
 #include "solver/app/lsm_fill_cmd.h"
 #include "solver/recon/lsm_rules.h"
 
@@ -668,6 +669,9 @@ lsm_status lsm_cli_parse(int argc, char **argv, lsm_cli *cli, lsm_err *err) {
     cli->command = LSM_CMD_SCORE;
     return parse_score(&c, cli, err);
   }
+  if (lsm_labels_format_of(cmd) != LSM_LABELS_UNKNOWN)
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown command '%s': to fill a label volume, "
+                    "'lsmorph fill %s -o OUT' (see 'lsmorph help fill')", cmd, cmd);
   return lsm_fail(err, LSM_ERR_USAGE, NULL, "unknown command '%s' (see 'lsmorph --help')", cmd);
 }
 

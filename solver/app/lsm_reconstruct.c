@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "io/lsm_io.h"
+#include "io/lsm_labels.h"
 #include "io/lsm_preview.h"
 #include "io/lsm_slice_worker.h"
 #include "solver/app/lsm_checks.h"
@@ -126,7 +127,14 @@ static lsm_status read_inputs(const lsm_cli *cli, lsm_slice_files *src, double *
                               int *height, lsm_out_dir *out_dir, const char *const *names,
                               size_t n_names, lsm_err *err) {
   size_t others = 0;
-  LSM_TRY(lsm_dir_list_slices(cli->slice_dir, &src->paths, &src->count, &others, err));
+  const lsm_status listed = lsm_dir_list_slices(cli->slice_dir, &src->paths, &src->count, &others, err);
+  if (listed != LSM_OK && err && lsm_labels_format_of(cli->slice_dir) != LSM_LABELS_UNKNOWN) {
+    const size_t used = strlen(err->msg); /* a label volume given where a folder goes */
+    snprintf(err->msg + used, sizeof err->msg - used,
+             " (a label volume? 'lsmorph fill %.200s -o OUT' fills the slices between its drawn "
+             "ones)", cli->slice_dir);
+  }
+  LSM_TRY(listed);
   if (others && !cli->quiet)
     fprintf(stderr, "lsmorph: note: %s: %zu image file%s in another format than PNG or TIFF "
                     "(.jpg, .bmp, ...) left out: slices are read from PNG and TIFF files only\n",
