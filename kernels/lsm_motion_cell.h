@@ -4,7 +4,7 @@
  * maps of its stationary velocity field (solver/README.md §9): bilinear samples, one
  * squaring step of the exponential, a warp, the demons update, a Gaussian tap sum.  Pure
  * functions of plain arrays, shared by the C path (solver/motion) and the OpenCL kernels
- * (kernels/motion.cl), so both run the same arithmetic.
+ * (kernels/motion.cl, host kernels/opencl/lsm_cl_motion.c), so both run the same arithmetic.
  *
  * Fields live on node grids: nx x ny floats, row-major, no ghost layer; a vector field is
  * two such planes (x, y), in node units.  Samples outside the grid take the nearest edge
@@ -41,6 +41,30 @@ LSM_FN float lsm_bilinear_strided(LSM_GLOBAL const float *f, LSM_IDX stride, int
 /* The same on a plane of rows nx floats apart. */
 LSM_FN float lsm_bilinear(LSM_GLOBAL const float *f, int nx, int ny, float x, float y) {
   return lsm_bilinear_strided(f, (LSM_IDX)nx, nx, ny, x, y);
+}
+
+/* A distance clipped to +-clip (the band the registration sees). */
+LSM_FN float lsm_motion_clip(float v, float clip) {
+  return v > clip ? clip : v < -clip ? -clip : v;
+}
+
+/* Whether a node informs the registration: either warped distance inside the clip band (the
+ * demons update is zero elsewhere; the mean squared mismatch is taken over these nodes). */
+LSM_FN int lsm_motion_active(float a, float b, float clip) {
+  return LSM_FABS(a) < clip || LSM_FABS(b) < clip;
+}
+
+/* t^2 |v|^2 at a node: the squared step of exp(t v) before scaling (its largest value over
+ * the nodes sets the number of squarings). */
+LSM_FN float lsm_motion_norm2(float t, float vx, float vy) {
+  return t * t * (vx * vx + vy * vy);
+}
+
+/* A coarser level's field component c (cnx x cny nodes) at node (i, j) of a finer level:
+ * bilinear at (i ratio, j ratio), times gain (coarse node units in fine ones). */
+LSM_FN float lsm_motion_upsample_at(LSM_GLOBAL const float *c, int cnx, int cny, float ratio,
+                                   float gain, int i, int j) {
+  return gain * lsm_bilinear(c, cnx, cny, (float)i * ratio, (float)j * ratio);
 }
 
 /* One squaring of the exponential at node (i, j): the map x -> x + d(x) composed with
@@ -88,7 +112,7 @@ LSM_FN float lsm_motion_demons(LSM_GLOBAL const float *wa, LSM_GLOBAL const floa
   *ux = 0.0f;
   *uy = 0.0f;
   const float a = wa[k], b = wb[k];
-  if (!(LSM_FABS(a) < clip) && !(LSM_FABS(b) < clip)) return 0.0f;
+  if (!lsm_motion_active(a, b, clip)) return 0.0f;
   const float lx = (float)(i1 - i0) * hx, ly = (float)(j1 - j0) * hy; /* central span */
   const float jx = i1 > i0 ? 0.5f * ((wa[rj + i1] - wa[rj + i0]) + (wb[rj + i1] - wb[rj + i0])) / lx
                            : 0.0f;

@@ -32,22 +32,28 @@ static int nodes_over(int cells, int step) { return (cells - 1 + step - 1) / ste
 
 /* ---- maps ------------------------------------------------------------------------------ */
 
+int lsm_motion_squarings(float most2, float t, float *scale) {
+  float most = sqrtf(most2);
+  int K = 0;
+  while (most > 0.5f && K < 40) { /* each of the 2^K steps within half a node */
+    most *= 0.5f;
+    ++K;
+  }
+  *scale = ldexpf(t, -K);
+  return K;
+}
+
 /* exp(t v) on an nx x ny grid into (dx, dy), scaling and squaring; (sx, sy) scratch. */
 static void exp_planes(const float *vx, const float *vy, float t, int nx, int ny, float *dx,
                        float *dy, float *sx, float *sy, int threads) {
   const size_t n = (size_t)nx * (size_t)ny;
   float most = 0.0f;
   for (size_t k = 0; k < n; ++k) {
-    const float m = t * t * (vx[k] * vx[k] + vy[k] * vy[k]);
+    const float m = lsm_motion_norm2(t, vx[k], vy[k]);
     if (m > most) most = m;
   }
-  most = sqrtf(most);
-  int K = 0;
-  while (most > 0.5f && K < 40) { /* each of the 2^K steps within half a node */
-    most *= 0.5f;
-    ++K;
-  }
-  const float scale = ldexpf(t, -K);
+  float scale;
+  const int K = lsm_motion_squarings(most, t, &scale);
   for (size_t k = 0; k < n; ++k) {
     dx[k] = scale * vx[k];
     dy[k] = scale * vy[k];
@@ -108,7 +114,7 @@ static void blur_field(float *fx, float *fy, float *tx, float *ty, int nx, int n
 
 /* The planes one registration needs, sized for its finest level. */
 enum { P_A, P_B, P_WX, P_WY, P_UX, P_UY, P_TX, P_TY, P_PX, P_PY, P_MX, P_MY, P_SX, P_SY,
-       P_WA, P_WB, P_C, P_COUNT };
+       P_WA, P_WB, P_R, P_C, P_COUNT };
 
 /* phi sampled at the nodes of a level (node (I, J) at cell (I step, J step), clamped to the
  * interior), clipped to +-clip. */
@@ -117,27 +123,42 @@ static void sample_level(const lsm_grid *phi, int step, int nx, int ny, float cl
     const int cj = j * step < phi->ny ? j * step : phi->ny - 1;
     for (int i = 0; i < nx; ++i) {
       const int ci = i * step < phi->nx ? i * step : phi->nx - 1;
-      const float v = LSM_AT(phi, ci, cj);
-      out[(size_t)j * nx + i] = v > clip ? clip : v < -clip ? -clip : v;
+      out[(size_t)j * nx + i] = lsm_motion_clip(LSM_AT(phi, ci, cj), clip);
     }
   }
 }
 
-/* One level's iterations on the field (wx, wy) of its grid; returns the iterations taken. */
-static int run_level(float *const *pl, int nx, int ny, float hx, float hy, float clip,
-                     const lsm_motion_params *p, int level, int threads) {
+void lsm_motion_mismatch(const float *r2, const float *c, int nx, int ny, double *sum,
+                         double *count) {
+  *sum = 0.0;
+  *count = 0.0;
+  for (int j = 0; j < ny; ++j) {
+    double row = 0.0, active = 0.0;
+    for (int i = 0; i < nx; ++i) {
+      row += r2[(size_t)j * nx + i];
+      active += c[(size_t)j * nx + i];
+    }
+    *sum += row;
+    *count += active;
+  }
+}
+
+int lsm_motion_level_stops(const lsm_motion_level *lv, double *history, int it, double sum,
+                           double count) {
+  history[it] = count > 0.0 ? sum / count : 0.0;
+  if (count == 0.0) return 1; /* nothing to register */
+  return it >= lv->stop_window &&
+         history[it] > (1.0 - lv->stop_drop) * history[it - lv->stop_window];
+}
+
+/* One level's iterations on the host (lsm_motion_level; pl: the planes, lv's among them). */
+static int run_level(float *const *pl, const lsm_motion_level *lv, int threads) {
+  const int nx = lv->nx, ny = lv->ny;
   const size_t n = (size_t)nx * (size_t)ny;
   const int nt = node_threads(n, threads);
-  const int step = p->step[level];
-  float ku[2 * 64 + 1], kw[2 * 64 + 1];
-  const int ru = gauss_kernel(p->sigma_update_px / step, ku, 64);
-  const int rw = gauss_kernel(p->sigma_field_px / step, kw, 64);
-  double history[512];
-  const int most = p->iterations[level] < 512 ? p->iterations[level] : 512;
-  double *rows = malloc((size_t)ny * 2 * sizeof *rows);
-  if (!rows) return -1;
+  double history[LSM_MOTION_ITERATIONS_MAX];
   int it = 0;
-  for (; it < most; ++it) {
+  for (; it < lv->iterations; ++it) {
     exp_planes(pl[P_WX], pl[P_WY], 0.5f, nx, ny, pl[P_PX], pl[P_PY], pl[P_SX], pl[P_SY], threads);
     exp_planes(pl[P_WX], pl[P_WY], -0.5f, nx, ny, pl[P_MX], pl[P_MY], pl[P_SX], pl[P_SY], threads);
 #pragma omp parallel for num_threads(nt) schedule(static)
@@ -147,39 +168,23 @@ static int run_level(float *const *pl, int nx, int ny, float hx, float hy, float
         pl[P_WB][(size_t)j * nx + i] = lsm_motion_warp(pl[P_B], pl[P_PX], pl[P_PY], nx, ny, i, j);
       }
 #pragma omp parallel for num_threads(nt) schedule(static)
-    for (int j = 0; j < ny; ++j) {
-      double sum = 0.0, count = 0.0;
+    for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
         const size_t k = (size_t)j * nx + i;
-        float ux, uy;
-        const float r2 = lsm_motion_demons(pl[P_WA], pl[P_WB], nx, ny, i, j, hx, hy, clip, &ux, &uy);
-        pl[P_UX][k] = ux;
-        pl[P_UY][k] = uy;
-        sum += r2;
-        pl[P_C][k] = fabsf(pl[P_WA][k]) < clip || fabsf(pl[P_WB][k]) < clip;
-        count += pl[P_C][k];
+        pl[P_R][k] = lsm_motion_demons(pl[P_WA], pl[P_WB], nx, ny, i, j, lv->hx, lv->hy,
+                                       lv->clip, &pl[P_UX][k], &pl[P_UY][k]);
+        pl[P_C][k] = (float)lsm_motion_active(pl[P_WA][k], pl[P_WB][k], lv->clip);
       }
-      rows[2 * j] = sum;
-      rows[2 * j + 1] = count;
-    }
-    double sum = 0.0, count = 0.0; /* in row order: the same for any thread count */
-    for (int j = 0; j < ny; ++j) {
-      sum += rows[2 * j];
-      count += rows[2 * j + 1];
-    }
-    history[it] = count > 0.0 ? sum / count : 0.0;
-    if (count == 0.0) break; /* nothing to register */
-    if (it >= p->stop_window &&
-        history[it] > (1.0 - p->stop_drop) * history[it - p->stop_window])
-      break;
-    blur_field(pl[P_UX], pl[P_UY], pl[P_TX], pl[P_TY], nx, ny, ku, ru, threads);
+    double sum, count;
+    lsm_motion_mismatch(pl[P_R], pl[P_C], nx, ny, &sum, &count);
+    if (lsm_motion_level_stops(lv, history, it, sum, count)) break;
+    blur_field(pl[P_UX], pl[P_UY], pl[P_TX], pl[P_TY], nx, ny, lv->ku, lv->ru, threads);
     for (size_t k = 0; k < n; ++k) {
       pl[P_WX][k] += pl[P_UX][k];
       pl[P_WY][k] += pl[P_UY][k];
     }
-    blur_field(pl[P_WX], pl[P_WY], pl[P_TX], pl[P_TY], nx, ny, kw, rw, threads);
+    blur_field(pl[P_WX], pl[P_WY], pl[P_TX], pl[P_TY], nx, ny, lv->kw, lv->rw, threads);
   }
-  free(rows);
   return it;
 }
 
@@ -190,9 +195,8 @@ static void upsample(const float *cx, const float *cy, int cnx, int cny, int sc,
   const float ratio = (float)sf / (float)sc, gain = (float)sc / (float)sf;
   for (int j = 0; j < fny; ++j)
     for (int i = 0; i < fnx; ++i) {
-      const float x = (float)i * ratio, y = (float)j * ratio;
-      fx[(size_t)j * fnx + i] = gain * lsm_bilinear(cx, cnx, cny, x, y);
-      fy[(size_t)j * fnx + i] = gain * lsm_bilinear(cy, cnx, cny, x, y);
+      fx[(size_t)j * fnx + i] = lsm_motion_upsample_at(cx, cnx, cny, ratio, gain, i, j);
+      fy[(size_t)j * fnx + i] = lsm_motion_upsample_at(cy, cnx, cny, ratio, gain, i, j);
     }
 }
 
@@ -265,9 +269,19 @@ lsm_status lsm_motion_register(const lsm_grid *phi_a, const lsm_grid *phi_b,
       memcpy(pl[P_SY], pl[P_WY], (size_t)pnx * pny * sizeof(float));
       upsample(pl[P_SX], pl[P_SY], pnx, pny, pstep, pl[P_WX], pl[P_WY], nx, ny, step);
     }
-    const int it = run_level(pl, nx, ny, hx, hy, clip, p, l, threads);
-    if (it < 0) st = lsm_fail(err, LSM_ERR_NOMEM, NULL, "out of memory in the registration");
-    else f->iterations += it;
+    float ku[2 * 64 + 1], kw[2 * 64 + 1];
+    lsm_motion_level lv = {.nx = nx, .ny = ny, .hx = hx, .hy = hy, .clip = clip,
+                           .a = pl[P_A], .b = pl[P_B], .wx = pl[P_WX], .wy = pl[P_WY],
+                           .ku = ku, .kw = kw,
+                           .ru = gauss_kernel(p->sigma_update_px / step, ku, 64),
+                           .rw = gauss_kernel(p->sigma_field_px / step, kw, 64),
+                           .iterations = p->iterations[l] < LSM_MOTION_ITERATIONS_MAX
+                                             ? p->iterations[l] : LSM_MOTION_ITERATIONS_MAX,
+                           .stop_window = p->stop_window, .stop_drop = p->stop_drop};
+    int it = 0;
+    if (p->device.run_level) st = p->device.run_level(p->device.ctx, &lv, &it, err);
+    else it = run_level(pl, &lv, threads);
+    f->iterations += it;
     pnx = nx;
     pny = ny;
     pstep = step;

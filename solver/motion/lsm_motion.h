@@ -18,6 +18,33 @@
 
 #define LSM_MOTION_LEVELS_MAX 4
 
+/* One pyramid level of the registration, as lsm_motion_register hands it to where it runs:
+ * node grids of nx x ny floats, row-major.  Each iteration: P = exp(w/2), M = exp(-w/2),
+ * a' = A(M), b' = B(P), the demons update u (lsm_motion_demons) smoothed with ku, w += u,
+ * w smoothed with kw; the level stops after `iterations` or where lsm_motion_level_stops
+ * says so. */
+typedef struct lsm_motion_level {
+  int nx, ny;
+  float hx, hy, clip;     /* node spacing (physical), the distances' clip */
+  const float *a, *b;     /* the two slices' distances at the nodes, clipped */
+  float *wx, *wy;         /* the field: in, the start (upsampled); out, the result */
+  const float *ku, *kw;   /* Gaussian taps of the update's and the field's smoothing */
+  int ru, rw;             /* their radii (0: no smoothing) */
+  int iterations;         /* at most (<= LSM_MOTION_ITERATIONS_MAX) */
+  int stop_window;
+  double stop_drop;
+} lsm_motion_level;
+#define LSM_MOTION_ITERATIONS_MAX 512
+
+/* Where the levels run: a backend's device (kernels/opencl/lsm_cl_motion.c), given by the
+ * backend's optional `motion` op (lsm_backend_motion).  run_level NULL: on the host. */
+typedef struct lsm_motion_device {
+  void *ctx;
+  /* Runs lv's iterations (the same numbers as the host's; lv->wx, wy updated); *taken:
+   * how many. */
+  lsm_status (*run_level)(void *ctx, const lsm_motion_level *lv, int *taken, lsm_err *err);
+} lsm_motion_device;
+
 /* The registration's constants (lsm_motion_params_default; their derivations and
  * ablations: solver/README.md §9, validation/measurements/motion.md). */
 typedef struct lsm_motion_params {
@@ -29,6 +56,7 @@ typedef struct lsm_motion_params {
   double sigma_field_px;  /* Gaussian smoothing of the field after each update, pixels */
   int stop_window;        /* a level stops when the mean squared mismatch fell by less */
   double stop_drop;       /* than stop_drop (a share) over the last stop_window iterations */
+  lsm_motion_device device; /* where the levels run (default: zeroed, the host) */
 } lsm_motion_params;
 
 void lsm_motion_params_default(lsm_motion_params *p);
@@ -52,6 +80,19 @@ typedef struct lsm_motion_field {
 lsm_status lsm_motion_register(const lsm_grid *phi_a, const lsm_grid *phi_b,
                                const lsm_motion_params *p, int threads, lsm_motion_field **out,
                                lsm_err *err);
+/* Shared by the host and the devices (the decisions, taken on the host in double):
+ * lsm_motion_squarings: K, the squarings of exp(t v) whose largest lsm_motion_norm2 over
+ * the nodes is most2 (each of the 2^K steps within half a node); *scale = t / 2^K.
+ * lsm_motion_mismatch: the sum of r2 and of the active flags c over the nodes, each row in
+ * double, then the rows in order (the same for any thread count or work-group shape).
+ * lsm_motion_level_stops: records iteration it's mean squared mismatch in history; 1 when
+ * the level stops there (no active node, or a drop below stop_drop over stop_window). */
+int lsm_motion_squarings(float most2, float t, float *scale);
+void lsm_motion_mismatch(const float *r2, const float *c, int nx, int ny, double *sum,
+                         double *count);
+int lsm_motion_level_stops(const lsm_motion_level *lv, double *history, int it, double sum,
+                           double count);
+
 /* A zero field over the canvas of phi (the identity maps). */
 lsm_status lsm_motion_field_zero(const lsm_grid *phi, int step, lsm_motion_field **out,
                                  lsm_err *err);
