@@ -103,22 +103,24 @@ $(BUILD)/obj/%.o: %.c $(FLAGS_STAMP) | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(OBJ_CFLAGS) -c $< -o $@
 
-# OpenCL kernels embedded in the binary: kernels/morph.cl with kernels/lsm_cell.h,
-# kernels/lsm_stencil.h and kernels/lsm_particle_cell.h spliced in at its #includes
-# (the headers' own #include of lsm_cell.h dropped: it is already there), as a C
-# byte array (a string literal would pass -Wpedantic's 4095-character limit),
-# NUL-terminated.
+# OpenCL kernels embedded in the binary: kernels/morph.cl then kernels/motion.cl, with
+# the kernels/lsm_*.h headers they include spliced in at their #includes (the headers'
+# own #include of lsm_cell.h dropped: it is already there; a header spliced twice is
+# kept out by its guard), as a C byte array (a string literal would pass -Wpedantic's
+# 4095-character limit), NUL-terminated.
+KERNEL_CL := kernels/morph.cl kernels/motion.cl
 KERNEL_GEN := $(BUILD)/gen/lsm_kernels.h
-$(KERNEL_GEN): kernels/morph.cl kernels/lsm_cell.h kernels/lsm_stencil.h kernels/lsm_particle_cell.h
+$(KERNEL_GEN): $(KERNEL_CL) $(wildcard kernels/lsm_*.h)
 	@mkdir -p $(dir $@)
-	@{ echo '/* Generated from kernels/morph.cl + kernels/lsm_*.h by the Makefile: do not edit. */'; \
+	@{ echo '/* Generated from kernels/morph.cl, motion.cl + kernels/lsm_*.h by the Makefile: do not edit. */'; \
 	  echo 'static const unsigned char lsm_kernel_source[] = {'; \
-	  awk '/^#include "lsm_(particle_cell|cell|stencil).h"/ { f = $$2; gsub(/"/, "", f); n = 0; \
+	  awk 'FNR == 1 { cl = FILENAME; sub(/^kernels\//, "", cl); print "#line 1 \"" cl "\"" } \
+	       /^#include "lsm_[a-z_]+\.h"/ { f = $$2; gsub(/"/, "", f); n = 0; \
 	         while ((getline l < ("kernels/" f)) > 0) { n++; \
 	           if (l ~ /^#include "kernels\/lsm_cell.h"/) l = ""; \
 	           if (n == 1) print "#line 1 \"" f "\""; print l } \
 	         close("kernels/" f); \
-	         print "#line " (NR + 1) " \"morph.cl\""; next } { print }' kernels/morph.cl \
+	         print "#line " (FNR + 1) " \"" cl "\""; next } { print }' $(KERNEL_CL) \
 	    | od -An -v -tx1 | sed 's/^ *//; s/ *$$//; s/  */,0x/g; s/^/0x/; s/$$/,/'; \
 	  echo '0x00};'; } > $@.tmp && mv $@.tmp $@
 $(BUILD)/obj/kernels/opencl/lsm_cl_context.o $(BUILD)/fuzz/obj/kernels/opencl/lsm_cl_context.o: $(KERNEL_GEN)

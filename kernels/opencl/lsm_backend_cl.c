@@ -2,9 +2,11 @@
  * backends (lsm_backend_opencl_entry, declared in solver/pde/lsm_backend.h).
  *
  * The run-wide context is lsm_cl_context (device, program); a pair state is the grid's fields
- * (lsm_cl_grid) and, with --method pls, its particles (lsm_cl_particles). */
+ * (lsm_cl_grid) and, with --method pls, its particles (lsm_cl_particles); the registration of
+ * --motion field runs its levels on the device (lsm_cl_motion). */
 #include "kernels/opencl/lsm_cl_context.h"
 #include "kernels/opencl/lsm_cl_grid.h"
+#include "kernels/opencl/lsm_cl_motion.h"
 #include "kernels/opencl/lsm_cl_particles.h"
 #include "solver/pde/lsm_backend.h"
 
@@ -115,6 +117,10 @@ static lsm_status cl_fill_rim(void *state, lsm_field field, float g, lsm_err *er
   return lsm_cl_band_fill_rim(((cl_pair *)state)->grid, field, g, err);
 }
 
+static void cl_motion(void *ctx, struct lsm_motion_device *dev) {
+  lsm_cl_motion_device(ctx, dev);
+}
+
 static const lsm_backend_ops cl_ops = {
     .facts = cl_facts,
     .close = lsm_cl_context_close,
@@ -135,6 +141,7 @@ static const lsm_backend_ops cl_ops = {
     .band_set = cl_band_set,
     .band_write = cl_band_write,
     .fill_rim = cl_fill_rim,
+    .motion = cl_motion,
 };
 
 const lsm_backend_entry lsm_backend_opencl_entry = {.host_threads = 0,

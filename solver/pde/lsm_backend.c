@@ -89,6 +89,12 @@ const char *lsm_backend_name(const lsm_backend *b) { return b->name; }
 const char *lsm_backend_fallback(const lsm_backend *b) { return b->fallback; }
 int lsm_backend_host_threads(const lsm_backend *b) { return b->entry->host_threads; }
 
+int lsm_backend_motion(const lsm_backend *b, struct lsm_motion_device *dev) {
+  if (!b || !b->entry->ops->motion) return 0;
+  b->entry->ops->motion(b->ctx, dev);
+  return 1;
+}
+
 int lsm_backend_facts(const lsm_backend *b, lsm_backend_fact *facts, int max) {
   return b->entry->ops->facts(b->ctx, facts, max);
 }

@@ -26,6 +26,8 @@
 #include "solver/pde/lsm_particles.h"
 #include "solver/pde/lsm_scheme.h"
 
+struct lsm_motion_device; /* solver/motion/lsm_motion.h: where a registration runs */
+
 /* The fields of a pair state that ops name; phi_target is fixed at creation. */
 typedef enum lsm_field {
   LSM_FIELD_PHI,    /* the morph's working field */
@@ -101,6 +103,10 @@ typedef struct lsm_backend_ops {
   lsm_status (*band_write)(void *state, lsm_field field, const int32_t *cells,
                            const float *values, size_t n, lsm_err *err);
   lsm_status (*fill_rim)(void *state, lsm_field field, float g, lsm_err *err);
+  /* ---- optional: the correspondence field (--motion field) ---------------------------------
+   * motion: *dev = this backend as the runner of the registration's levels (run-wide, on
+   * ctx; solver/motion/lsm_motion.h).  Absent: the registration runs on the host. */
+  void (*motion)(void *ctx, struct lsm_motion_device *dev);
 } lsm_backend_ops;
 
 /* One row of the table of backends. */
@@ -152,6 +158,10 @@ int lsm_backend_host_threads(const lsm_backend *backend);
 /* The backend's facts (ops.facts); lsm_backend_device: the "device" fact's text. */
 int lsm_backend_facts(const lsm_backend *backend, lsm_backend_fact *facts, int max);
 const char *lsm_backend_device(const lsm_backend *backend);
+
+/* Fills *dev with where the backend runs the correspondence field's registration and
+ * returns 1; 0 (dev untouched) where it has no motion op or backend is NULL: the host. */
+int lsm_backend_motion(const lsm_backend *backend, struct lsm_motion_device *dev);
 
 /* For a backend's facts op: the run.json contract's three facts, device (text), build_seconds
  * (the kernel program's build) and kernel_cache_hit (false: lsmorph keeps no kernel cache),

@@ -54,6 +54,7 @@ void lsm_flows_params(const lsm_stack_opts *o, lsm_motion_params *p) {
   p->sigma_field_px = o->rules.motion_sigma_field_px;
   p->sigma_update_px = o->rules.motion_sigma_update_px;
   p->clip_nodes = o->rules.motion_clip_nodes;
+  lsm_backend_motion(o->morph.backend, &p->device); /* a device backend registers there */
 }
 
 lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
