@@ -6,7 +6,8 @@
 # on every 8th slice of the bunny (examples/data/bunny, when present), with
 # --method ls and --method pls, must agree within 1e-3 in every voxel of
 # volume.nrrd (and pls runs must report the same particle counters in
-# run.json); `lsmorph devices` lists a device; a missing device index fails
+# run.json; with --motion field, the same registration iterations and largest displacements
+# within 1e-3 px); `lsmorph devices` lists a device; a missing device index fails
 # with exit 1 and a message; no kernel cache of lsmorph's own is written.  Prints one line per failed check and
 # "opencl: N passed, N failed".  Without any OpenCL platform or device the
 # checks are skipped (the Makefile installs PoCL, so on CI they run).
@@ -128,6 +129,24 @@ compare() {
   check "$name: run.json's cp agrees ($(diff "$TMP/$name-c.cp" "$TMP/$name-opencl.cp" | head -3))" \
     cmp -s "$TMP/$name-c.cp" "$TMP/$name-opencl.cp"
   case " $* " in
+  *" --motion field "*)
+    # The registration of every pair (on the device with opencl): the same iterations, and
+    # the largest displacements within TOL pixels.
+    grep -o '"registration_iterations": [0-9]*' "$TMP/$name-c/run.json" >"$TMP/$name-c.mit"
+    grep -o '"registration_iterations": [0-9]*' "$TMP/$name-opencl/run.json" >"$TMP/$name-opencl.mit"
+    check "$name: run.json has the registrations" [ -s "$TMP/$name-opencl.mit" ]
+    check "$name: the registrations' iterations agree ($(diff "$TMP/$name-c.mit" "$TMP/$name-opencl.mit" | head -3))" \
+      cmp -s "$TMP/$name-c.mit" "$TMP/$name-opencl.mit"
+    grep -o '"max_displacement": [0-9.e+-]*' "$TMP/$name-c/run.json" | cut -d' ' -f2 >"$TMP/$name-c.mdp"
+    grep -o '"max_displacement": [0-9.e+-]*' "$TMP/$name-opencl/run.json" | cut -d' ' -f2 >"$TMP/$name-opencl.mdp"
+    d=$(paste "$TMP/$name-c.mdp" "$TMP/$name-opencl.mdp" |
+      awk 'BEGIN { m = 0 } { d = $1 - $2; if (d < 0) d = -d; if (NF != 2) d = 1e30; if (d > m) m = d } END { print m }')
+    echo "opencl: $name: max |max_displacement_opencl - max_displacement_c| = $d px"
+    check "$name: the fields' largest displacements agree within $TOL px (max diff $d)" \
+      awk -v d="$d" -v t="$TOL" 'BEGIN { exit !(d + 0 <= t + 0) }'
+    ;;
+  esac
+  case " $* " in
   *" pls "*)
     # The particle counters of every pair, in order: the same on both backends.
     grep -o '"particles": {[^}]*}' "$TMP/$name-c/run.json" >"$TMP/$name-c.pcl"
@@ -168,6 +187,26 @@ compare candlestick-1e20 "$SET" --spacing 40e20 --pixel-size 1e20 --dz 10e20
 rc=$?
 check "--method blend --backend opencl (host path) exits 0 (got $rc: $(cat "$TMP/e"))" [ $rc -eq 0 ]
 
+# --motion field: the correspondence field registered on the device (kernels/motion.cl), the
+# morph in its moving frame; a disc that moves more than its width per gap, the candlestick
+# (parts that appear and vanish), with particles riding the flow.
+mkdir -p "$TMP/moving"
+/usr/bin/python3 - "$TMP/moving" "$(dirname "$0")" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[2])
+from make_png import write_drawn as png
+W, H = 72, 60
+for k in range(4):
+    cx, cy = 14 + 14 * k, 24 + 4 * k
+    png("%s/%d.png" % (sys.argv[1], k + 1),
+        ["".join("#" if (x - cx) ** 2 + (y - cy) ** 2 <= 36 else "." for x in range(W))
+         for y in range(H)])
+PY
+compare moving-disc-motion "$TMP/moving" --spacing 8 --motion field
+compare candlestick-motion "$SET" --heights "$SET/heights.txt" --dz 10 --motion field
+compare candlestick-motion-pls "$SET" --heights "$SET/heights.txt" --dz 10 --motion field \
+  --method pls
+
 compare candlestick-rk2-track "$SET" --scheme upwind --time rk2 --per-iteration --tol 2
 # A --tol so fine that CP's last bits decide the stopping step: four pixels into a wedge, where the
 # device's float reduction of ||phi - phi_T|| stopped the pair at 57 slices and the C backend at 55.
@@ -201,6 +240,7 @@ if [ -d "$BUNNY" ]; then
   done
   compare bunny "$TMP/bunny" --spacing 8 --dz 2
   compare bunny-pls "$TMP/bunny" --spacing 8 --dz 2 --method pls
+  compare bunny-motion "$TMP/bunny" --spacing 8 --dz 2 --motion field
 else
   echo "opencl: note: $BUNNY not found, bunny comparison not run"
 fi
