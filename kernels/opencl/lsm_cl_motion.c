@@ -84,11 +84,6 @@ static lsm_status level_open(cl_level *L, lsm_cl_ctx *c, int nx, int ny, lsm_err
   L->ny = ny;
   L->n = (cl_int)n;
   L->shaped = c->max_group >= 64 && c->max_items[0] >= 16 && c->max_items[1] >= 4;
-  L->local[0] = 16;
-  L->local[1] = 4;
-  L->global[0] = L->shaped ? round_up((size_t)nx, 16) : (size_t)nx;
-  L->global[1] = L->shaped ? round_up((size_t)ny, 4) : (size_t)ny;
-  L->local1 = L->shaped ? 64 : 1;
   cl_int e;
   L->queue = clCreateCommandQueue(c->context, c->device, 0, &e);
   if (e != CL_SUCCESS) {
@@ -103,7 +98,18 @@ static lsm_status level_open(cl_level *L, lsm_cl_ctx *c, int nx, int ny, lsm_err
       snprintf(call, sizeof call, "clCreateKernel(%s)", kernel_names[k]);
       return lsm_cl_fail(err, c->name, call, e);
     }
+    size_t limit = 0; /* a kernel may take fewer work-items per group than the device */
+    LSM_CL_TRY(c->name, "clGetKernelWorkGroupInfo",
+               clGetKernelWorkGroupInfo(L->k[k], c->device, CL_KERNEL_WORK_GROUP_SIZE,
+                                        sizeof limit, &limit, NULL));
+    if (limit > 0 && limit < 64) L->shaped = 0;
   }
+  /* groups of 16 x 4 (64 in 1D), the NDRange rounded up to them; else the runtime's */
+  L->local[0] = 16;
+  L->local[1] = 4;
+  L->global[0] = L->shaped ? round_up((size_t)nx, 16) : (size_t)nx;
+  L->global[1] = L->shaped ? round_up((size_t)ny, 4) : (size_t)ny;
+  L->local1 = L->shaped ? 64 : 1;
   for (int b = 0; b < B_COUNT; ++b) {
     const size_t floats = b == B_R2C ? 2 * n : b == B_ROWS ? (size_t)ny
                           : b == B_KU || b == B_KW ? TAPS_MAX : n;
