@@ -2,11 +2,15 @@
  * the registration recovers a translation both ways, its exponentials invert each other,
  * identical slices give the zero field and then exactly the plain morph, and a thin
  * ellipse turning 40 degrees per gap is carried across the gap whole where the morph in
- * place lets it shrink. */
+ * place lets it shrink.  Per part (rule field-parts, solver/recon/lsm_pairing): a pair is
+ * registered only where some part moved off itself, a part appearing beside a still body
+ * leaves the run exactly the plain morph's, and a still body beside a tube that jumps past
+ * it stays where the morph in place leaves it while the tube is carried. */
 #include "tests/lsm_test.h"
 
 #include "solver/base/lsm_grid.h"
 #include "solver/motion/lsm_motion.h"
+#include "solver/recon/lsm_pairing.h"
 #include "solver/recon/lsm_stack.h"
 #include "solver/sdf/lsm_sdf.h"
 
@@ -15,15 +19,19 @@ typedef struct disc {
   double cx, cy, r, q, t;
 } disc;
 
-static void paint(const disc *d, lsm_mask *m) {
+/* Paints d into m: over it (or 0) or, with `add`, added to it (r = 0: nothing). */
+static void paint_on(const disc *d, int add, lsm_mask *m) {
   const double q = d->q > 0.0 ? d->q : d->r, c = cos(d->t), s = sin(d->t);
   for (int y = 0; y < m->height; ++y)
     for (int x = 0; x < m->width; ++x) {
       const double u = x - d->cx, v = y - d->cy, along = c * u + s * v, across = -s * u + c * v;
-      m->pixels[(size_t)y * m->width + x] =
-          along * along / (d->r * d->r) + across * across / (q * q) <= 1.0;
+      const uint8_t in = d->r > 0.0 && along * along / (d->r * d->r) + across * across / (q * q) <= 1.0;
+      uint8_t *p = &m->pixels[(size_t)y * m->width + x];
+      *p = add ? (uint8_t)(*p | in) : in;
     }
 }
+
+static void paint(const disc *d, lsm_mask *m) { paint_on(d, 0, m); }
 
 static lsm_grid *disc_phi(int w, int h, disc d) {
   lsm_err err;
@@ -126,6 +134,7 @@ enum { SW = 96, SH = 64 };
 
 typedef struct stack_ctx {
   const disc *d;
+  const disc *also; /* a second shape per slice, or NULL */
   float *out; /* every output slice */
   double z[64];
   size_t n;
@@ -136,6 +145,7 @@ static lsm_status src_load(void *ctx, size_t index, lsm_mask *out, lsm_err *err)
   const stack_ctx *c = ctx;
   LSM_TRY(lsm_mask_create(SW, SH, out, err));
   paint(&c->d[index], out);
+  if (c->also) paint_on(&c->also[index], 1, out);
   return LSM_OK;
 }
 
@@ -151,13 +161,16 @@ static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, 
   return LSM_OK;
 }
 
-static void run(const disc *d, const double *z, size_t count, lsm_motion_mode motion,
-                stack_ctx *c) {
+/* Runs slices d (and c->also, set by the caller or NULL) with default options but
+ * --align none, --motion motion and, with whole, the rule field-parts off. */
+static void run_rules(const disc *d, const double *z, size_t count, lsm_motion_mode motion,
+                      int whole, stack_ctx *c) {
   lsm_stack_opts o;
   lsm_stack_opts_default(&o);
   o.align = LSM_ALIGN_NONE;
   o.motion = motion;
   o.morph.threads = 2;
+  if (whole) o.rules.off |= (uint64_t)1 << LSM_RULE_FIELD_PARTS;
   c->d = d;
   c->n = 0;
   c->out = malloc(sizeof(float) * SW * SH * 64);
@@ -169,6 +182,12 @@ static void run(const disc *d, const double *z, size_t count, lsm_motion_mode mo
   lsm_err_clear(&err);
   assert_int_equal(lsm_stack_run(&src, SW, SH, &o, &sink, stats, NULL, &err), LSM_OK);
   c->max_px = stats[0].motion_max_px;
+}
+
+static void run(const disc *d, const double *z, size_t count, lsm_motion_mode motion,
+                stack_ctx *c) {
+  c->also = NULL;
+  run_rules(d, z, count, motion, 0, c);
 }
 
 /* Slices that do not move: the field is zero and the output is the plain morph's, float for
@@ -246,12 +265,108 @@ static void test_turning(void **state) {
   free(none.out);
 }
 
+/* Whether lsm_pairing would register the pair of shapes a (+ a2) and b (+ b2). */
+static int pairing_needs(const disc *a, const disc *a2, const disc *b, const disc *b2) {
+  lsm_err err;
+  lsm_err_clear(&err);
+  lsm_mask ma, mb;
+  assert_int_equal(lsm_mask_create(SW, SH, &ma, &err), LSM_OK);
+  assert_int_equal(lsm_mask_create(SW, SH, &mb, &err), LSM_OK);
+  paint(a, &ma);
+  paint(b, &mb);
+  if (a2) paint_on(a2, 1, &ma);
+  if (b2) paint_on(b2, 1, &mb);
+  lsm_grid *pa = NULL, *pb = NULL;
+  assert_int_equal(lsm_grid_create(SW, SH, 1.0f, 1.0f, &pa, &err), LSM_OK);
+  assert_int_equal(lsm_grid_create(SW, SH, 1.0f, 1.0f, &pb, &err), LSM_OK);
+  assert_int_equal(lsm_sdf_from_mask(&ma, pa, &err), LSM_OK);
+  assert_int_equal(lsm_sdf_from_mask(&mb, pb, &err), LSM_OK);
+  lsm_pairing *p = NULL;
+  int needs = -1;
+  assert_int_equal(lsm_pairing_create(&ma, &mb, pa, pb, 0, &p, &needs, &err), LSM_OK);
+  lsm_pairing_destroy(&p);
+  lsm_grid_destroy(&pa);
+  lsm_grid_destroy(&pb);
+  lsm_mask_free(&ma);
+  lsm_mask_free(&mb);
+  return needs;
+}
+
+/* The test in place: a disc (radius 10) moved by 4 px (under half its radius) or growing
+ * in place, or a part appearing beside it, needs no field; moved by 8 px, or a part
+ * vanishing on one side while another appears on the other, does. */
+static void test_pairing_needs(void **state) {
+  (void)state;
+  const disc at = {40, 32, 10, 0, 0}, near = {44, 32, 10, 0, 0}, far = {48, 32, 10, 0, 0};
+  const disc grown = {40, 32, 16, 0, 0}, left = {12, 12, 4, 0, 0}, right = {80, 50, 4, 0, 0};
+  assert_int_equal(pairing_needs(&at, NULL, &near, NULL), 0);
+  assert_int_equal(pairing_needs(&at, NULL, &grown, NULL), 0);
+  assert_int_equal(pairing_needs(&at, NULL, &at, &right), 0);
+  assert_int_equal(pairing_needs(&at, &left, &at, NULL), 0);
+  assert_int_equal(pairing_needs(&at, NULL, &far, NULL), 1);
+  assert_int_equal(pairing_needs(&at, &left, &at, &right), 1);
+}
+
+/* A part appearing beside a still body: nothing is registered and the run is the plain
+ * morph's, float for float. */
+static void test_appearing_is_plain(void **state) {
+  (void)state;
+  const disc body[3] = {{30, 32, 14, 0, 0}, {30, 32, 14, 0, 0}, {30, 32, 14, 0, 0}};
+  const disc lobe[3] = {{0, 0, 0, 0, 0}, {70, 30, 6, 0, 0}, {71, 31, 7, 0, 0}};
+  const double z[3] = {0, 8, 16};
+  stack_ctx field = {.also = lobe}, none = {.also = lobe};
+  run_rules(body, z, 3, LSM_MOTION_FIELD, 0, &field);
+  run_rules(body, z, 3, LSM_MOTION_NONE, 0, &none);
+  assert_int_equal(field.n, none.n);
+  assert_true(field.max_px == 0.0);
+  assert_memory_equal(field.out, none.out, sizeof(float) * SW * SH * field.n);
+  free(field.out);
+  free(none.out);
+}
+
+/* A still body (radius 14) and a tube (radius 4) jumping 12 px per gap past it: the tube
+ * takes the field (carried whole: at mid-gap its area is within a fifth of the disc's),
+ * the body stays in place: within 8 px of it every output cell has the sign the run with
+ * no field gives it, but for a hundredth of the body's area. */
+static void test_still_beside_moving(void **state) {
+  (void)state;
+  const disc body[3] = {{22, 32, 14, 0, 0}, {22, 32, 14, 0, 0}, {22, 32, 14, 0, 0}};
+  const disc tube[3] = {{56, 32, 4, 0, 0}, {68, 32, 4, 0, 0}, {80, 32, 4, 0, 0}};
+  const double z[3] = {0, 8, 16};
+  stack_ctx field = {.also = tube}, none = {.also = tube};
+  run_rules(body, z, 3, LSM_MOTION_FIELD, 0, &field);
+  run_rules(body, z, 3, LSM_MOTION_NONE, 0, &none);
+  assert_int_equal(field.n, none.n);
+  double tube_area = 0.0, differ = 0.0;
+  for (int y = 0; y < SH; ++y)
+    for (int x = 0; x < SW; ++x) {
+      const size_t k = 3 * (size_t)SW * SH + (size_t)y * SW + x; /* mid-gap of the first gap */
+      if (x >= 48) tube_area += field.out[k] <= 0.0f;
+      for (size_t q = 0; q < field.n && hypot(x - 22.0, y - 32.0) < 14.0 + 8.0; ++q) {
+        const size_t c = q * SW * SH + (size_t)y * SW + x;
+        differ += (field.out[c] <= 0.0f) != (none.out[c] <= 0.0f);
+      }
+    }
+  const double disc_area = 3.14159265358979 * 16.0, body_area = 3.14159265358979 * 196.0;
+  print_message("mid-gap tube area %.0f (disc %.0f); body cells that differ from in place: "
+                "%.0f over %zu slices; largest displacement %.1f px\n", tube_area, disc_area,
+                differ, field.n, field.max_px);
+  assert_true(field.max_px > 6.0);
+  assert_true(fabs(tube_area - disc_area) < 0.2 * disc_area);
+  assert_true(differ <= 0.01 * body_area * (double)field.n);
+  free(field.out);
+  free(none.out);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_translation),
       cmocka_unit_test(test_inverse),
       cmocka_unit_test(test_still_is_plain),
       cmocka_unit_test(test_turning),
+      cmocka_unit_test(test_pairing_needs),
+      cmocka_unit_test(test_appearing_is_plain),
+      cmocka_unit_test(test_still_beside_moving),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

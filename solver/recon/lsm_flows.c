@@ -5,9 +5,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/recon/lsm_pairing.h"
+
 typedef struct flow_slot {
   omp_lock_t lock;
-  lsm_motion_field *field; /* NULL until computed, and after it is freed */
+  lsm_motion_field *field; /* NULL until computed, when no part takes it, after it is freed */
+  int done;                /* decided (field set or none needed) */
   int finished;            /* gaps of this process beside it that have finished */
 } flow_slot;
 
@@ -31,6 +34,7 @@ lsm_status lsm_flows_create(size_t pairs, int rank, int size, lsm_flows **out, l
   for (size_t k = 0; k < pairs; ++k) {
     omp_init_lock(&f->slots[k].lock);
     f->slots[k].field = NULL;
+    f->slots[k].done = 0;
     f->slots[k].finished = 0;
   }
   *out = f;
@@ -63,17 +67,28 @@ lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
   flow_slot *slot = &flows->slots[pair];
   lsm_status st = LSM_OK;
   omp_set_lock(&slot->lock);
-  if (!slot->field) {
+  if (!slot->done) {
     const int pad = LSM_FLOWS_PAD;
     const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
     lsm_grid *pa = NULL, *pb = NULL;
+    lsm_pairing *parts = NULL;
     st = lsm_grid_create(width + 2 * pad, height + 2 * pad, hx, hy, &pa, err);
     if (st == LSM_OK) st = lsm_grid_create(width + 2 * pad, height + 2 * pad, hx, hy, &pb, err);
     if (st == LSM_OK) st = lsm_slice_phi(a, o, pad, pad, pa, err);
     if (st == LSM_OK) st = lsm_slice_phi(b, o, pad, pad, pb, err);
+    /* rule field-parts: only a pair where some part may take the field is registered */
+    const int per_part = lsm_rule_on(&o->rules, LSM_RULE_FIELD_PARTS);
+    int needs = 1, taken = 1;
+    if (st == LSM_OK && per_part)
+      st = lsm_pairing_create(&a->filled, &b->filled, pa, pb, pad, &parts, &needs, err);
     lsm_motion_params p;
     lsm_flows_params(o, &p);
-    if (st == LSM_OK) st = lsm_motion_register(pa, pb, &p, threads, &slot->field, err);
+    if (st == LSM_OK && needs) st = lsm_motion_register(pa, pb, &p, threads, &slot->field, err);
+    if (st == LSM_OK && needs && per_part)
+      st = lsm_pairing_weigh(parts, slot->field, threads, &taken, err);
+    if (st != LSM_OK || !taken) lsm_motion_field_destroy(&slot->field);
+    slot->done = st == LSM_OK;
+    lsm_pairing_destroy(&parts);
     lsm_grid_destroy(&pa);
     lsm_grid_destroy(&pb);
   }

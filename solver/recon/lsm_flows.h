@@ -27,7 +27,9 @@ void lsm_flows_destroy(lsm_flows **flows);
 
 /* The field of pair `pair`, a and b its two slices (loaded), on the canvas of an unaligned
  * gap (width + 2 LSM_FLOWS_PAD by height + 2 LSM_FLOWS_PAD); computed on first use with
- * `threads` threads.  Valid until the gaps that read it are done. */
+ * `threads` threads, weighed per part (lsm_pairing, rule field-parts).  *field is NULL
+ * where no part takes it (the pair stays in place).  Valid until the gaps that read it
+ * are done. */
 lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
                          const lsm_stack_opts *o, int width, int height, int threads,
                          const lsm_motion_field **field, lsm_err *err);

@@ -41,6 +41,7 @@ static lsm_status gap_moving(const lsm_stack_opts *o, int width, int height, con
                              lsm_flows *flows, int threads, lsm_gap *g, lsm_err *err) {
   const lsm_motion_field *field = NULL;
   LSM_TRY(lsm_flows_get(flows, w->gap, w->s[1], w->s[2], o, width, height, threads, &field, err));
+  if (!field) return LSM_OK; /* no part takes it: the gap stays in place */
   LSM_TRY(lsm_grid_clone(g->phi_a, &g->carried, err));
   LSM_TRY(lsm_moving_setup(&g->mv, field, g->phi_a, g->phi_b, threads, err));
   g->moving = 1;
@@ -59,10 +60,15 @@ static lsm_status moving_neighbour(const lsm_stack_opts *o, int width, int heigh
   else
     LSM_TRY(lsm_flows_get(flows, w->gap + 1, w->s[2], w->s[3], o, width, height, threads, &field,
                           err));
-  LSM_TRY(lsm_moving_pull_neighbour(&g->mv, field, side, phi, err));
+  /* a pair beyond that stays in place moves the neighbour by this gap's half map only */
+  lsm_motion_field *none = NULL;
+  if (!field) LSM_TRY(lsm_motion_field_zero(phi, g->mv.w->step, &none, err));
+  const lsm_motion_field *beyond = field ? field : none;
+  lsm_status st = lsm_moving_pull_neighbour(&g->mv, beyond, side, phi, err);
   const double H = w->z[2] - w->z[1], Hb = side ? w->z[3] - w->z[2] : w->z[1] - w->z[0];
-  LSM_TRY(lsm_moving_tangent(&g->mv, field, side, H, Hb, err));
-  return LSM_OK;
+  if (st == LSM_OK) st = lsm_moving_tangent(&g->mv, beyond, side, H, Hb, err);
+  lsm_motion_field_destroy(&none);
+  return st;
 }
 
 /* phi of one part on the window around it (bounding box + parts_margin_px,

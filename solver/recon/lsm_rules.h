@@ -85,6 +85,14 @@
     "moved by the shift between their centres, a pair of parts overlaps at IoU >= parts_iou",     \
     "the two are the same shape, moved",                                                          \
     "shapes are not compared")                                                                    \
+  X(FIELD_PARTS, "field-parts",                                                                   \
+    "--motion field: two parts matched one to one in place and under the field take it when "     \
+    "they do not overlap or each reaches half the larger half-thickness outside the other; "      \
+    "other parts stay in place (the field zero on them); a pair with no such part is not "        \
+    "registered",                                                                                 \
+    "a field on the whole slice drags outlines toward parts that appear or vanish; a disc "       \
+    "moved by less than half its radius blends in place",                                         \
+    "the field of the whole slice pair everywhere")                                               \
   /* parts with no counterpart (lsm_unmatched) */                                                 \
   X(UNMATCHED, "unmatched",                                                                       \
     "ls/pls: a part overlapping nothing of the other slice, farther from it than its own depth "  \
