@@ -253,6 +253,7 @@ expect "--spacing inf" 2 "--spacing: 'inf' is not a number" out reconstruct good
 expect "--spacing junk" 2 "--spacing: '2mm' is not a number" out reconstruct good -o out --spacing 2mm
 expect "--motion field --align hull" 2 "--motion field works in default mode with --align auto or none, not with --align hull" out reconstruct good -o out -q --motion field --align hull
 expect "--motion field --per-iteration" 2 "not with --per-iteration" out reconstruct good -o out -q --motion field --per-iteration
+expect "--motion field --method blend" 2 "not with --method blend" out reconstruct good -o out -q --motion field --method blend
 expect "--spacing hexadecimal" 2 "--spacing: '0x10' is not a number" out reconstruct good -o out --spacing 0x10
 expect "--spacing underflows" 2 "--spacing: '5e-324' is out of range" out reconstruct good -o out --spacing 5e-324
 expect "--spacing too large for floats" 2 "--spacing: 1e308 is outside 1e-30 to 1e+30" out reconstruct good -o out --spacing 1e308

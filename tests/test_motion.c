@@ -265,6 +265,27 @@ static void test_turning(void **state) {
   free(none.out);
 }
 
+/* The field is the default for ls and pls in default mode; blend (the textbook),
+ * --per-iteration and --align hull run in place; --align auto becomes none. */
+static void test_default(void **state) {
+  (void)state;
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  assert_int_equal(o.motion, LSM_MOTION_FIELD);
+  lsm_stack_opts_resolve(&o);
+  assert_int_equal(o.motion, LSM_MOTION_FIELD);
+  assert_int_equal(o.align, LSM_ALIGN_NONE);
+  for (int k = 0; k < 3; ++k) {
+    lsm_stack_opts_default(&o);
+    if (k == 0) o.method = LSM_METHOD_BLEND;
+    if (k == 1) o.per_iteration = 1;
+    if (k == 2) o.align = LSM_ALIGN_HULL;
+    lsm_stack_opts_resolve(&o);
+    assert_int_equal(o.motion, LSM_MOTION_NONE);
+    assert_int_equal(o.align, k == 2 ? LSM_ALIGN_HULL : LSM_ALIGN_AUTO);
+  }
+}
+
 /* Whether lsm_pairing would register the pair of shapes a (+ a2) and b (+ b2). */
 static int pairing_needs(const disc *a, const disc *a2, const disc *b, const disc *b2) {
   lsm_err err;
@@ -364,6 +385,7 @@ int main(void) {
       cmocka_unit_test(test_inverse),
       cmocka_unit_test(test_still_is_plain),
       cmocka_unit_test(test_turning),
+      cmocka_unit_test(test_default),
       cmocka_unit_test(test_pairing_needs),
       cmocka_unit_test(test_appearing_is_plain),
       cmocka_unit_test(test_still_beside_moving),

@@ -539,6 +539,7 @@ static void test_end_moves_on(void **state) {
   const double z[5] = {0, 8, 16, 24, 32};
   lsm_stack_opts o;
   default_opts(&o);
+  o.motion = LSM_MOTION_NONE; /* --align auto's rules act with --motion none */
   run r;
   assert_int_equal(run_stack(&r, W, H, 0, defs, z, 5, &o), LSM_OK);
   assert_int_equal(r.sink.n, 33);
@@ -986,6 +987,7 @@ static void test_align(void **state) {
    * takes the overlap from 0 to the whole disc). */
   for (int mode = 0; mode < 2; ++mode) {
     default_opts(&o);
+    o.motion = LSM_MOTION_NONE; /* --align auto acts with --motion none */
     o.align = mode ? LSM_ALIGN_AUTO : LSM_ALIGN_HULL;
     assert_int_equal(run_stack(&r, W, H, 0, defs, z, 2, &o), LSM_OK);
     assert_int_equal(r.sink.n, 8);
@@ -1118,6 +1120,7 @@ static void test_parts_apart(void **state) {
   for (int variant = 0; variant < 3; ++variant) {
     lsm_stack_opts o;
     default_opts(&o);
+    o.motion = LSM_MOTION_NONE; /* the moving-parts rule acts with --motion none */
     if (variant == 1) o.interp = LSM_INTERP_LINEAR;
     if (variant == 2) o.method = LSM_METHOD_PLS;
     run r;
@@ -1161,6 +1164,7 @@ static lsm_pair_stats first_gap(const slice_def defs[2], const char *off) {
   const double z2[2] = {0, 8};
   lsm_stack_opts o;
   default_opts(&o);
+  o.motion = LSM_MOTION_NONE; /* the rules below act in place */
   if (off) switch_off(&o, off);
   run r;
   assert_int_equal(run_stack(&r, W, H, 0, defs, z2, 2, &o), LSM_OK);

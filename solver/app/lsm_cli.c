@@ -103,13 +103,13 @@ static const help_row reconstruct_rows[] = {
                                  "(halfway); default auto: tip beside the first\n"
                                  "and last slice given, halfway elsewhere"),
     CHOOSE("--align", align_names, "move slices by their convex-hull centroids:\n"
-                                   "pairs whose shape moved (auto, the default),\n"
-                                   "every pair (hull), or none"),
-    CHOOSE("--motion", motion_names, "follow structures that move, turn or branch:\n"
-                                     "each gap in the moving frame of a registration\n"
-                                     "of its two slices (field, replacing --align\n"
-                                     "auto; not with hull or --per-iteration), or\n"
-                                     "in place (none, the default)"),
+                                   "pairs whose shape moved (auto, the default,\n"
+                                   "with --motion none), every pair (hull), none"),
+    CHOOSE("--motion", motion_names, "follow what moves, turns or branches: field\n"
+                                     "(default): parts that moved off themselves follow\n"
+                                     "a registration, the rest morph in place (ls, pls;\n"
+                                     "not with hull, --per-iteration); none: in place,\n"
+                                     "with --align auto and moving parts"),
     OPT("--rules-off NAME,...", "switch reconstruction rules off, for experiments\n"
                                "('lsmorph help rules' lists them)"),
     CHOOSE("--scheme", scheme_names, "numerical Hamiltonian\n"
@@ -565,8 +565,14 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     cli->spacing_given |= strcmp(name, "--spacing") == 0;
     cli->interp_given |= strcmp(name, "--interp") == 0;
     cli->ends_given |= strcmp(name, "--ends") == 0;
+    cli->motion_given |= strcmp(name, "--motion") == 0;
     cli->nrrd_encoding_given |= strcmp(name, "--nrrd-encoding") == 0;
   }
+  if (cli->motion_given && so->motion == LSM_MOTION_FIELD &&
+      (so->per_iteration || so->align == LSM_ALIGN_HULL || so->method == LSM_METHOD_BLEND))
+    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--motion field works in default mode with --align "
+                    "auto or none, not with %s", so->per_iteration ? "--per-iteration"
+                    : so->align == LSM_ALIGN_HULL ? "--align hull" : "--method blend");
   if (!cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing SLICE_DIR");
   if (!cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing -o OUT_DIR");
   if (!*cli->out_dir)

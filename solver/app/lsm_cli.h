@@ -58,7 +58,7 @@ typedef struct lsm_cli {
   int mesh;                  /* --mesh: write surface.ply */
   int preview;               /* preview.png and preview3d.png (--no-preview: 0) */
   lsm_stack_opts stack;
-  int interp_given, ends_given; /* --interp / --ends on the command line */
+  int interp_given, ends_given, motion_given; /* --interp / --ends / --motion given */
   /* options given that may not apply to the run (a note then says so): the
    * first solver option (--scheme, --time, --cfl, --max-iter, --reinit-*), the
    * first particle option (--particles-per-cell, --pls-*, --seed) */

@@ -21,7 +21,7 @@ LSM_NAME_FUNCTIONS(lsm_end_rule, LSM_ENDS_LIST, lsm_end_rule_name, lsm_end_rule_
 
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
   *opts = (lsm_stack_opts){.method = LSM_METHOD_LS, .input = LSM_INPUT_MASK,
-                           .align = LSM_ALIGN_AUTO, .motion = LSM_MOTION_NONE,
+                           .align = LSM_ALIGN_AUTO, .motion = LSM_MOTION_FIELD,
                            .interp = LSM_INTERP_CUBIC, .ends = LSM_ENDS_AUTO, .pixel_dx = 1.0,
                            .pixel_dy = 1.0, .dz = 0.0 /* the pixel size */, .tol = 0.25,
                            .max_iter = 100000};
@@ -31,7 +31,12 @@ void lsm_stack_opts_default(lsm_stack_opts *opts) {
 
 void lsm_stack_opts_resolve(lsm_stack_opts *opts) {
   if (opts->per_iteration) opts->interp = LSM_INTERP_LINEAR;
-  /* the field replaces --align auto's alignment (lsm_stack_run refuses it with hull) */
+  /* the field is for ls and pls in default mode: blend stays the textbook, --per-iteration
+   * and --align hull the document's modes (the command line refuses --motion field there) */
+  if (opts->motion == LSM_MOTION_FIELD &&
+      (opts->per_iteration || opts->align == LSM_ALIGN_HULL || opts->method == LSM_METHOD_BLEND))
+    opts->motion = LSM_MOTION_NONE;
+  /* the field replaces --align auto's alignment */
   if (opts->motion == LSM_MOTION_FIELD && opts->align == LSM_ALIGN_AUTO) opts->align = LSM_ALIGN_NONE;
   if (opts->interp == LSM_INTERP_LINEAR) opts->ends = LSM_ENDS_HALFWAY;
 }
@@ -87,9 +92,6 @@ lsm_status lsm_stack_run(const lsm_slice_source *src, int width, int height,
                     LSM_LENGTH_MIN, LSM_LENGTH_MAX);
   if (opts->per_iteration && opts->method == LSM_METHOD_BLEND)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--per-iteration needs a solver method, not blend");
-  if (opts->motion == LSM_MOTION_FIELD && (opts->per_iteration || opts->align == LSM_ALIGN_HULL))
-    return lsm_fail(err, LSM_ERR_USAGE, NULL, "--motion field works in default mode with --align "
-                    "auto or none, not with %s", opts->per_iteration ? "--per-iteration" : "--align hull");
   const double dz = lsm_stack_output_dz(opts);
   const double z_mag = fmax(fabs(src->z[0]), fabs(src->z[src->count - 1]));
   for (size_t i = 1; opts->per_iteration && i < src->count; ++i)
