@@ -53,6 +53,8 @@ run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" labels "$TMP" drawn.nii.gz som
 fill drawn-i.nii.gz out-i.nii.gz --axis i
 run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" verify "$TMP" drawn-i.nii.gz out-i.nii.gz
 # options of reconstruct, in both spellings (3D Slicer's flags take '_')
+fill drawn.nii.gz field.nii.gz --motion field
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" verify "$TMP" drawn.nii.gz field.nii.gz
 fill drawn.nii.gz blend.nii.gz --method blend --interp linear --max_iter 500 -q
 check "-q: nothing on stderr" [ ! -s "$TMP/e" ]
 

@@ -265,18 +265,24 @@ static void test_turning(void **state) {
   free(none.out);
 }
 
-/* The field is the default for ls and pls in default mode; blend (the textbook),
- * --per-iteration and --align hull run in place; --align auto becomes none. */
+/* The default is in place with --align auto; the field, asked for, is for ls and pls in
+ * default mode (--align auto becomes none); blend (the textbook), --per-iteration and
+ * --align hull run in place. */
 static void test_default(void **state) {
   (void)state;
   lsm_stack_opts o;
   lsm_stack_opts_default(&o);
-  assert_int_equal(o.motion, LSM_MOTION_FIELD);
+  assert_int_equal(o.motion, LSM_MOTION_NONE);
+  lsm_stack_opts_resolve(&o);
+  assert_int_equal(o.motion, LSM_MOTION_NONE);
+  assert_int_equal(o.align, LSM_ALIGN_AUTO);
+  o.motion = LSM_MOTION_FIELD;
   lsm_stack_opts_resolve(&o);
   assert_int_equal(o.motion, LSM_MOTION_FIELD);
   assert_int_equal(o.align, LSM_ALIGN_NONE);
   for (int k = 0; k < 3; ++k) {
     lsm_stack_opts_default(&o);
+    o.motion = LSM_MOTION_FIELD;
     if (k == 0) o.method = LSM_METHOD_BLEND;
     if (k == 1) o.per_iteration = 1;
     if (k == 2) o.align = LSM_ALIGN_HULL;

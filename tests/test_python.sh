@@ -20,7 +20,8 @@ lib_python "$BUILD/liblsmorph.so"
 "$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/cli.nii.gz" -q &&
   "$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/cli-opts.nii.gz" -q --method blend --interp linear \
     --labels 2,3 --slices 0:40:4 &&
-  "$LSM" fill "$TMP/drawn.seg.nrrd" -o "$TMP/cli-seg.nrrd" -q
+  "$LSM" fill "$TMP/drawn.seg.nrrd" -o "$TMP/cli-seg.nrrd" -q &&
+  "$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/cli-field.nii.gz" -q --motion field
 check "the CLI's fills" [ $? -eq 0 ]
 
 run_checks "$TMP/log" env PYTHONPATH="$BUILD/python" "$PYLIB" - "$TMP" "$LSM" <<'PYEOF'
@@ -47,6 +48,9 @@ opts = lsmorph.fill(drawn, spacing=spacing, method="blend", interp="linear", fil
                     slices=range(0, 41, 4), threads=1)
 report((opts == np.asarray(nib.load(os.path.join(d, "cli-opts.nii.gz")).dataobj)).all(),
        "fill: options, slices and labels as the CLI's --method blend --interp linear --labels 2,3 --slices 0:40:4")
+field = lsmorph.fill(drawn, spacing=spacing, motion="field")
+report((field == np.asarray(nib.load(os.path.join(d, "cli-field.nii.gz")).dataobj)).all(),
+       "fill: motion='field' as the CLI's --motion field")
 try:
     lsmorph.fill(drawn, spacing=spacing, method="bogus")
     report(False, "fill: a bad option raises lsmorph.Error")

@@ -103,13 +103,12 @@ static const help_row reconstruct_rows[] = {
                                  "(halfway); default auto: tip beside the first\n"
                                  "and last slice given, halfway elsewhere"),
     CHOOSE("--align", align_names, "move slices by their convex-hull centroids:\n"
-                                   "pairs whose shape moved (auto, the default,\n"
-                                   "with --motion none), every pair (hull), none"),
-    CHOOSE("--motion", motion_names, "follow what moves, turns or branches: field\n"
-                                     "(default): parts that moved off themselves follow\n"
-                                     "a registration, the rest morph in place (ls, pls;\n"
-                                     "not with hull, --per-iteration); none: in place,\n"
-                                     "with --align auto and moving parts"),
+                                   "pairs whose shape moved (auto, the default),\n"
+                                   "every pair (hull), none"),
+    CHOOSE("--motion", motion_names, "field: parts that moved off themselves follow a\n"
+                                     "registration, the rest morph in place (ls, pls;\n"
+                                     "replaces --align auto; not with hull or\n"
+                                     "--per-iteration); none (default): in place"),
     OPT("--rules-off NAME,...", "switch reconstruction rules off, for experiments\n"
                                "('lsmorph help rules' lists them)"),
     CHOOSE("--scheme", scheme_names, "numerical Hamiltonian\n"

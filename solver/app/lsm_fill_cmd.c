@@ -22,7 +22,7 @@
 
 /* The options of reconstruct that fill takes: those with a value, then flags. */
 static const char *const shared_valued[] = {
-    "--method", "--interp", "--ends", "--align", "--scheme", "--time", "--cfl",
+    "--method", "--interp", "--ends", "--align", "--motion", "--scheme", "--time", "--cfl",
     "--reinit-every", "--reinit-iters", "--max-iter", "--particles-per-cell", "--pls-reseed",
     "--seed", "--backend", "--device", "--max-voxels", "--max-memory", "--rules-off", NULL};
 static const char *const shared_flags[] = {"--pls-radius-adjust", "-q", "--quiet", NULL};

@@ -42,8 +42,9 @@ static const char fill_help[] =
     "\n"
     "Method (as for 'lsmorph help reconstruct'):\n"
     "  --method ls|pls|blend, --interp cubic|linear, --align auto|hull|none,\n"
-    "  --scheme, --time, --cfl, --reinit-every, --reinit-iters, --max-iter,\n"
-    "  --particles-per-cell, --pls-reseed, --pls-radius-adjust, --seed, --rules-off\n"
+    "  --motion none|field, --scheme, --time, --cfl, --reinit-every, --reinit-iters,\n"
+    "  --max-iter, --particles-per-cell, --pls-reseed, --pls-radius-adjust, --seed,\n"
+    "  --rules-off\n"
     "  --ends halfway|tip|auto  default halfway: the drawn slices were placed without\n"
     "                         regard to where each structure ends, so an end may lie\n"
     "                         anywhere in its gap, and mid-gap is the median\n"
@@ -160,6 +161,9 @@ static const char fill_xml_method[] =
          DEF("halfway") EL("halfway") EL("tip") EL("auto"))
     ENUM("align", "Alignment", "Centroid alignment of sections that moved",
          DEF("auto") EL("auto") EL("hull") EL("none"))
+    ENUM("motion", "Motion", "field: parts that moved or turned off themselves follow a "
+         "registration of the two slices (replaces auto alignment); none: in place",
+         DEF("none") EL("none") EL("field"))
     ENUM("scheme", "Scheme", "Numerical Hamiltonian", DEF("upwind") EL("upwind") EL("roe-fix")
          EL("weno5"))
     ENUM("time", "Time integrator", "Euler or TVD Runge-Kutta", DEF("euler") EL("euler") EL("rk2")

@@ -21,7 +21,7 @@ LSM_NAME_FUNCTIONS(lsm_end_rule, LSM_ENDS_LIST, lsm_end_rule_name, lsm_end_rule_
 
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
   *opts = (lsm_stack_opts){.method = LSM_METHOD_LS, .input = LSM_INPUT_MASK,
-                           .align = LSM_ALIGN_AUTO, .motion = LSM_MOTION_FIELD,
+                           .align = LSM_ALIGN_AUTO, .motion = LSM_MOTION_NONE,
                            .interp = LSM_INTERP_CUBIC, .ends = LSM_ENDS_AUTO, .pixel_dx = 1.0,
                            .pixel_dy = 1.0, .dz = 0.0 /* the pixel size */, .tol = 0.25,
                            .max_iter = 100000};

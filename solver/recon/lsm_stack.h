@@ -119,8 +119,8 @@ typedef struct lsm_stack_opts {
   lsm_method method;
   lsm_input_kind input;
   lsm_align align;
-  lsm_motion_mode motion; /* the correspondence field (default field; none for blend,
-                          * --per-iteration and --align hull: lsm_stack_opts_resolve) */
+  lsm_motion_mode motion; /* the correspondence field (default none; field only for ls and
+                          * pls in default mode: lsm_stack_opts_resolve) */
   lsm_interp interp;   /* z-profile (default cubic) */
   lsm_end_rule ends;   /* how the cubic profile ends an object (default auto) */
   double pixel_dx;     /* physical width of a pixel: the step along a row, x (default 1) */

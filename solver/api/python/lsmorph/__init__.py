@@ -41,10 +41,11 @@ class _Options(ctypes.Structure):
                 ("max_iter", ctypes.c_int), ("reinit_every", ctypes.c_int),
                 ("reinit_iters", ctypes.c_int), ("particles_per_cell", ctypes.c_int),
                 ("seed", ctypes.c_uint64), ("threads", ctypes.c_int),
-                ("backend", ctypes.c_char_p), ("device", ctypes.c_int)]
+                ("backend", ctypes.c_char_p), ("device", ctypes.c_int),
+                ("motion", ctypes.c_char_p)]
 
 
-_TEXT = ("method", "interp", "ends", "align", "scheme", "time", "backend")
+_TEXT = ("method", "interp", "ends", "align", "motion", "scheme", "time", "backend")
 _NUMBERS = ("cfl", "max_iter", "reinit_every", "reinit_iters", "particles_per_cell", "seed",
             "threads", "device")
 
@@ -131,8 +132,8 @@ def fill(labels, spacing=(1.0, 1.0, 1.0), axis=None, slices=None, fill_labels=No
     fill_labels  the labels to fill; None: every non-zero value (the others are kept)
     out          the array to fill (the result); None: a copy of ``labels``; ``labels``
                  itself fills it in place
-    options      method, interp, ends (default "halfway"), align, scheme, time, cfl, max_iter,
-                 reinit_every, reinit_iters, particles_per_cell, seed, threads, backend, device
+    options      method, interp, ends (default "halfway"), align, motion, scheme, time, cfl,
+                 max_iter, reinit_every, reinit_iters, particles_per_cell, seed, threads, backend, device
 
     Returns the filled array (``out``).  The drawn slices and the labels not filled come back
     exactly; each voxel between gets the label it lies deepest inside, or 0.
