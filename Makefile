@@ -155,7 +155,7 @@ $(BUILD)/validation/%: validation/%.c $(BUILD)/liblsmorph.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $< $(BUILD)/liblsmorph.a -o $@ $(LDLIBS)
 
-$(BUILD)/tests/%: tests/%.c tests/lsm_test.h $(BUILD)/liblsmorph.a
+$(BUILD)/tests/%: tests/%.c $(wildcard tests/lsm_test*.h) $(BUILD)/liblsmorph.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $< $(BUILD)/liblsmorph.a -o $@ $(LDLIBS) -lcmocka
 
