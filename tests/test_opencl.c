@@ -24,6 +24,7 @@
  * the tests print why and are skipped (the Makefile installs PoCL, so on CI
  * they run); a device that fails to build the program fails them. */
 #include "tests/lsm_test.h"
+#include "tests/lsm_test_io.h"
 #include "tests/lsm_test_pair.h"
 
 #include <dirent.h>
@@ -74,26 +75,6 @@ static void scan_dir(const char *dir, const char *suffix, int *with, int *withou
   closedir(d);
 }
 
-/* rm -r (symbolic links are removed, not followed). */
-static void remove_tree(const char *path, int depth) {
-  struct stat sb;
-  if (depth > 32 || lstat(path, &sb) != 0) return;
-  if (S_ISDIR(sb.st_mode)) {
-    DIR *d = opendir(path);
-    if (d) {
-      struct dirent *e;
-      while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-        char sub[4096];
-        int n = snprintf(sub, sizeof sub, "%s/%s", path, e->d_name);
-        if (n > 0 && (size_t)n < sizeof sub) remove_tree(sub, depth + 1);
-      }
-      closedir(d);
-    }
-  }
-  remove(path);
-}
-
 static int need_device(void) {
   if (fx.cl) return 1;
   print_message("opencl: skipped: %s\n", fx.why.msg[0] ? fx.why.msg : "no OpenCL device");
@@ -138,7 +119,7 @@ static int group_setup(void **state) {
 static int group_teardown(void **state) {
   (void)state;
   lsm_backend_close(&fx.cl);
-  if (fx.cache[0]) remove_tree(fx.cache, 0);
+  if (fx.cache[0]) rm_rf(fx.cache);
   return 0;
 }
 

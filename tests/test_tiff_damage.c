@@ -5,7 +5,7 @@
  * directory readable; the encoded strips and tiles come from libtiff.  The
  * intact files read back exactly; every damaged one gives LSM_ERR_INPUT with
  * the file's name and libtiff's cause. */
-#include "lsm_test.h"
+#include "tests/lsm_test_io.h"
 
 #include <tiffio.h>
 #include <unistd.h>
@@ -213,29 +213,6 @@ static size_t write_tiff(const char *path, const layout *l, const chunks *c, con
   return o.n;
 }
 
-typedef struct tmp_dir {
-  char path[64];
-} tmp_dir;
-
-static int setup_dir(void **state) {
-  tmp_dir *t = malloc(sizeof *t);
-  if (!t) return -1;
-  snprintf(t->path, sizeof t->path, "/tmp/lsm_test_tiff_XXXXXX");
-  if (!mkdtemp(t->path)) {
-    free(t);
-    return -1;
-  }
-  *state = t;
-  return 0;
-}
-
-static int teardown_dir(void **state) {
-  tmp_dir *t = *state;
-  rmdir(t->path); /* each test removes its files */
-  free(t);
-  return 0;
-}
-
 /* Reads path; intact: the shape exactly, else refused naming the file. */
 static void check(const char *path, int intact, const char *cause) {
   lsm_mask m;
@@ -290,36 +267,36 @@ static void damaged(const char *dir, const char *name, const layout *l, const da
 }
 
 static void test_cut_g4_strip(void **state) {
-  const tmp_dir *t = *state;
+  const tmp_fixture *t = *state;
   const layout g4 = {1, PHOTOMETRIC_MINISBLACK, COMPRESSION_CCITTFAX4, 0, SIDE};
   /* the strip cut in half: its byte count past the end, or saying what is left */
   uint32_t half;
   {
     char scratch[128];
-    snprintf(scratch, sizeof scratch, "%s/scratch.tif", t->path);
+    snprintf(scratch, sizeof scratch, "%s/scratch.tif", t->dir);
     chunks c = {0};
     encode(scratch, &g4, &c);
     half = c.size[0] / 2;
     chunks_free(&c);
   }
   const damage past_end = {half, -1, 0, NULL, 0}, consistent = {half, -1, 1, NULL, 0};
-  damaged(t->path, "g4-cut.tif", &g4, &past_end, "a cut CCITT G4 strip");
-  damaged(t->path, "g4-cut-counted.tif", &g4, &consistent,
+  damaged(t->dir, "g4-cut.tif", &g4, &past_end, "a cut CCITT G4 strip");
+  damaged(t->dir, "g4-cut-counted.tif", &g4, &consistent,
           "a cut CCITT G4 strip, its byte count fitting the file");
 }
 
 static void test_garbage_g4(void **state) {
-  const tmp_dir *t = *state;
+  const tmp_fixture *t = *state;
   const layout g4 = {1, PHOTOMETRIC_MINISBLACK, COMPRESSION_CCITTFAX4, 0, SIDE};
   uint8_t junk[256];
   uint64_t seed = 20240601;
   for (size_t k = 0; k < sizeof junk; ++k) junk[k] = (uint8_t)lsm_test_rand(&seed);
   const damage garbage = {0, -1, 0, junk, sizeof junk};
-  damaged(t->path, "g4-garbage.tif", &g4, &garbage, "garbage CCITT G4 data");
+  damaged(t->dir, "g4-garbage.tif", &g4, &garbage, "garbage CCITT G4 data");
 }
 
 static void test_cut_and_missing_tiles(void **state) {
-  const tmp_dir *t = *state;
+  const tmp_fixture *t = *state;
   /* gray is read tile by tile, a palette through libtiff's RGBA reader */
   const layout gray = {8, PHOTOMETRIC_MINISBLACK, COMPRESSION_NONE, 32, 0};
   const layout palette = {8, PHOTOMETRIC_PALETTE, COMPRESSION_ADOBE_DEFLATE, 16, 0};
@@ -329,26 +306,26 @@ static void test_cut_and_missing_tiles(void **state) {
     char name[64];
     const damage cut = {100, -1, 0, NULL, 0}, missing = {0, 1, 0, NULL, 0};
     snprintf(name, sizeof name, "tiles-%s-cut.tif", names[k]);
-    damaged(t->path, name, layouts[k], &cut, "a cut tile");
+    damaged(t->dir, name, layouts[k], &cut, "a cut tile");
     snprintf(name, sizeof name, "tiles-%s-missing.tif", names[k]);
-    damaged(t->path, name, layouts[k], &missing, "a missing tile");
+    damaged(t->dir, name, layouts[k], &missing, "a missing tile");
   }
 }
 
 static void test_cut_lzw_strip(void **state) {
-  const tmp_dir *t = *state;
+  const tmp_fixture *t = *state;
   const layout lzw = {8, PHOTOMETRIC_MINISBLACK, COMPRESSION_LZW, 0, 16};
   const damage consistent = {40, -1, 1, NULL, 0};
-  damaged(t->path, "lzw-cut-counted.tif", &lzw, &consistent,
+  damaged(t->dir, "lzw-cut-counted.tif", &lzw, &consistent,
           "a cut LZW strip, its byte count fitting the file");
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test_setup_teardown(test_cut_g4_strip, setup_dir, teardown_dir),
-      cmocka_unit_test_setup_teardown(test_garbage_g4, setup_dir, teardown_dir),
-      cmocka_unit_test_setup_teardown(test_cut_and_missing_tiles, setup_dir, teardown_dir),
-      cmocka_unit_test_setup_teardown(test_cut_lzw_strip, setup_dir, teardown_dir),
+      cmocka_unit_test_setup_teardown(test_cut_g4_strip, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_garbage_g4, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_cut_and_missing_tiles, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_cut_lzw_strip, setup_tmp, teardown_tmp),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
