@@ -86,6 +86,7 @@ expect() { # expect RC PHRASE ARGS...
 expect 1 "not a label map: voxel" "$TMP/half.nii" -o "$TMP/none.nii"
 check "the file is named once" grep -q "^lsmorph: error: $TMP/half.nii: not a label map" "$TMP/e"
 expect 1 "far.nii: the voxel spacing along i is 1e+29, and" "$TMP/far.nii" -o "$TMP/none.nii"
+expect 1 "'byte skip' inside bzip2-encoded data is not supported" "$HERE/fuzz/corpus/labels/leak-teem-bzip2-skip.nrrd" -o "$TMP/none.nrrd"
 expect 1 "export the segmentation as a labelmap" "$TMP/layers.seg.nrrd" -o "$TMP/none.nrrd"
 expect 1 "only slice 20 holds labels" "$TMP/one.nii.gz" -o "$TMP/none.nii"
 expect 1 "no such folder" "$TMP/drawn.nii.gz" -o "$TMP/missing/none.nii"
