@@ -567,11 +567,10 @@ static lsm_status parse_reconstruct(arg_cursor *c, lsm_cli *cli, lsm_err *err) {
     cli->motion_given |= strcmp(name, "--motion") == 0;
     cli->nrrd_encoding_given |= strcmp(name, "--nrrd-encoding") == 0;
   }
-  if (cli->motion_given && so->motion == LSM_MOTION_FIELD &&
-      (so->per_iteration || so->align == LSM_ALIGN_HULL || so->method == LSM_METHOD_BLEND))
+  const char *excluded = lsm_stack_field_excluded_by(so);
+  if (cli->motion_given && so->motion == LSM_MOTION_FIELD && excluded)
     return lsm_fail(err, LSM_ERR_USAGE, NULL, "--motion field works in default mode with --align "
-                    "auto or none, not with %s", so->per_iteration ? "--per-iteration"
-                    : so->align == LSM_ALIGN_HULL ? "--align hull" : "--method blend");
+                    "auto or none, not with %s", excluded);
   if (!cli->slice_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing SLICE_DIR");
   if (!cli->out_dir) return lsm_fail(err, LSM_ERR_USAGE, NULL, "reconstruct: missing -o OUT_DIR");
   if (!*cli->out_dir)

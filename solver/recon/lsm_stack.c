@@ -29,12 +29,18 @@ void lsm_stack_opts_default(lsm_stack_opts *opts) {
   lsm_rules_default(&opts->rules);
 }
 
+const char *lsm_stack_field_excluded_by(const lsm_stack_opts *opts) {
+  return opts->per_iteration                ? "--per-iteration"
+         : opts->align == LSM_ALIGN_HULL     ? "--align hull"
+         : opts->method == LSM_METHOD_BLEND ? "--method blend"
+                                            : NULL;
+}
+
 void lsm_stack_opts_resolve(lsm_stack_opts *opts) {
   if (opts->per_iteration) opts->interp = LSM_INTERP_LINEAR;
   /* the field is for ls and pls in default mode: blend stays the textbook, --per-iteration
    * and --align hull the document's modes (the command line refuses --motion field there) */
-  if (opts->motion == LSM_MOTION_FIELD &&
-      (opts->per_iteration || opts->align == LSM_ALIGN_HULL || opts->method == LSM_METHOD_BLEND))
+  if (opts->motion == LSM_MOTION_FIELD && lsm_stack_field_excluded_by(opts))
     opts->motion = LSM_MOTION_NONE;
   /* the field replaces --align auto's alignment */
   if (opts->motion == LSM_MOTION_FIELD && opts->align == LSM_ALIGN_AUTO) opts->align = LSM_ALIGN_NONE;

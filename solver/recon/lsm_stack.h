@@ -144,6 +144,9 @@ void lsm_stack_opts_default(lsm_stack_opts *opts);
  * lsm_stack_run applies this to its own copy; callers that record the options
  * (run.json) apply it first. */
 void lsm_stack_opts_resolve(lsm_stack_opts *opts);
+/* The mode that rules out the correspondence field (blend, the textbook; --per-iteration and
+ * --align hull, the document's modes): its option name, or NULL when the field can run. */
+const char *lsm_stack_field_excluded_by(const lsm_stack_opts *opts);
 
 /* Where input slices come from (the CLI reads PNG files; tests synthesise). */
 typedef struct lsm_slice_source {
