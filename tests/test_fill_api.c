@@ -53,22 +53,24 @@ static void fill_motion(uint8_t *v, int whole, int threads, lsm_motion_mode moti
   lsm_fill_plan_free(&plan);
 }
 
-static void fill_with(uint8_t *v, int whole, int threads) { /* the default: in place */
-  fill_motion(v, whole, threads, LSM_MOTION_NONE);
+static void fill_with(uint8_t *v, int whole, int threads) { /* the default */
+  fill_motion(v, whole, threads, LSM_MOTION_AUTO);
 }
 
 /* A label's box plus the margin gives the whole slice's result: voxel for voxel in place
  * (--motion none: the morph inside the box sees what it would see on the whole slice);
- * with the field (--motion field) but for a thousandth of the voxels, its node grid and
- * smoothing following the canvas. */
+ * with the field (--motion field, and auto where it takes it) but for a thousandth of the
+ * voxels, its node grid and smoothing following the canvas. */
 static void test_box_is_whole(void **state) {
   (void)state;
   const size_t n = (size_t)NX * NY * NZ;
   uint8_t *a = scene(), *b;
   drawn_every(a, 4);
   b = malloc(n);
-  for (int field = 0; field < 2; ++field) {
-    const lsm_motion_mode motion = field ? LSM_MOTION_FIELD : LSM_MOTION_NONE;
+  const lsm_motion_mode modes[3] = {LSM_MOTION_NONE, LSM_MOTION_FIELD, LSM_MOTION_AUTO};
+  for (int m = 0; m < 3; ++m) {
+    const lsm_motion_mode motion = modes[m];
+    const int field = motion != LSM_MOTION_NONE;
     uint8_t *fresh = scene();
     drawn_every(fresh, 4);
     memcpy(a, fresh, n);
@@ -83,12 +85,12 @@ static void test_box_is_whole(void **state) {
     if (field ? differ > n / 1000 : differ > 0)
       fail_msg("%zu voxels differ between the boxes and whole slices", differ);
   }
-  /* and the thread count changes nothing (a: the field's boxes on 2 threads) */
+  /* and the thread count changes nothing (a: auto's boxes on 2 threads) */
   uint8_t *fresh = scene();
   memcpy(b, fresh, n);
   free(fresh);
   drawn_every(b, 4);
-  fill_motion(b, 0, 1, LSM_MOTION_FIELD);
+  fill_motion(b, 0, 1, LSM_MOTION_AUTO);
   assert_memory_equal(a, b, n);
   free(a);
   free(b);

@@ -5,7 +5,9 @@
  * place lets it shrink.  Per part (rule field-parts, solver/recon/lsm_pairing): a pair is
  * registered only where some part moved off itself, a part appearing beside a still body
  * leaves the run exactly the plain morph's, and a still body beside a tube that jumps past
- * it stays where the morph in place leaves it while the tube is carried. */
+ * it stays where the morph in place leaves it while the tube is carried.  --motion auto
+ * (solver/recon/lsm_choose): the turning ellipse takes the field in every pair, chosen by
+ * leaving its slices out; a disc growing in place, or a stack of two, runs as in place. */
 #include "tests/lsm_test.h"
 
 #include "solver/base/lsm_grid.h"
@@ -265,14 +267,95 @@ static void test_turning(void **state) {
   free(none.out);
 }
 
-/* The default is in place with --align auto; the field, asked for, is for ls and pls in
- * default mode (--align auto becomes none); blend (the textbook), --per-iteration and
- * --align hull run in place. */
+/* ---- --motion auto (solver/recon/lsm_choose) ------------------------------------------- */
+
+/* Runs slices d with default options but --motion motion; stats gets each pair's. */
+static void run_default(const disc *d, const double *z, size_t count, lsm_motion_mode motion,
+                        stack_ctx *c, lsm_pair_stats *stats) {
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  o.motion = motion;
+  o.morph.threads = 2;
+  c->d = d;
+  c->also = NULL;
+  c->n = 0;
+  c->out = malloc(sizeof(float) * SW * SH * 64);
+  assert_non_null(c->out);
+  lsm_slice_source src = {c, count, z, src_load, NULL};
+  lsm_slice_sink sink = {c, sink_emit};
+  lsm_err err;
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_stack_run(&src, SW, SH, &o, &sink, stats, NULL, &err), LSM_OK);
+}
+
+/* The thin ellipse turning 40 degrees per gap over five slices: leaving each inner slice
+ * out, the field predicts it better than the morph in place, so every pair takes the field
+ * and the run is --motion field's, float for float. */
+static void test_auto_turning(void **state) {
+  (void)state;
+  const double deg = 3.14159265358979323846 / 180.0;
+  disc d[5];
+  double z[5];
+  for (int k = 0; k < 5; ++k) {
+    d[k] = (disc){48, 32, 16, 3, 40 * k * deg};
+    z[k] = 8 * k;
+  }
+  stack_ctx autoc, field;
+  lsm_pair_stats sa[4], sf[4];
+  run_default(d, z, 5, LSM_MOTION_AUTO, &autoc, sa);
+  run_default(d, z, 5, LSM_MOTION_FIELD, &field, sf);
+  for (int p = 0; p < 4; ++p) {
+    print_message("pair %d: left out %d, missed %lld with the field, %lld in place\n", p,
+                  sa[p].motion_tests, sa[p].motion_missed_field, sa[p].motion_missed_in_place);
+    assert_int_equal(sa[p].motion_tests, p == 0 || p == 3 ? 1 : 2);
+    assert_true(sa[p].motion_missed_field < sa[p].motion_missed_in_place);
+    assert_int_equal(sa[p].motion_field, 1);
+  }
+  assert_int_equal(autoc.n, field.n);
+  assert_memory_equal(autoc.out, field.out, sizeof(float) * SW * SH * autoc.n);
+  free(autoc.out);
+  free(field.out);
+}
+
+/* Where no part moved off itself (a disc growing in place) nothing is left out and the run
+ * is --motion none's, float for float; a pair with no slice to leave out (a stack of two, a
+ * disc jumping past its width) stays in place too. */
+static void test_auto_in_place(void **state) {
+  (void)state;
+  const disc grow[4] = {{40, 30, 8, 0, 0}, {41, 30, 10, 0, 0}, {42, 31, 12, 0, 0},
+                        {42, 32, 14, 0, 0}};
+  const disc jump[2] = {{20, 30, 6, 0, 0}, {60, 34, 6, 0, 0}};
+  const double z[4] = {0, 6, 12, 18};
+  for (int t = 0; t < 2; ++t) {
+    const disc *d = t ? jump : grow;
+    const size_t count = t ? 2 : 4;
+    stack_ctx autoc, none;
+    lsm_pair_stats sa[3], sn[3];
+    run_default(d, z, count, LSM_MOTION_AUTO, &autoc, sa);
+    run_default(d, z, count, LSM_MOTION_NONE, &none, sn);
+    for (size_t p = 0; p + 1 < count; ++p) {
+      assert_int_equal(sa[p].motion_tests, 0);
+      assert_int_equal(sa[p].motion_field, 0);
+    }
+    assert_int_equal(autoc.n, none.n);
+    assert_memory_equal(autoc.out, none.out, sizeof(float) * SW * SH * autoc.n);
+    free(autoc.out);
+    free(none.out);
+  }
+}
+
+/* The default is auto, which keeps --align auto for the pairs it leaves in place; the
+ * field, asked for everywhere, is for ls and pls in default mode (--align auto becomes none);
+ * blend (the textbook), --per-iteration and --align hull run in place, under auto too. */
 static void test_default(void **state) {
   (void)state;
   lsm_stack_opts o;
   lsm_stack_opts_default(&o);
-  assert_int_equal(o.motion, LSM_MOTION_NONE);
+  assert_int_equal(o.motion, LSM_MOTION_AUTO);
+  lsm_stack_opts_resolve(&o);
+  assert_int_equal(o.motion, LSM_MOTION_AUTO);
+  assert_int_equal(o.align, LSM_ALIGN_AUTO);
+  o.motion = LSM_MOTION_NONE;
   lsm_stack_opts_resolve(&o);
   assert_int_equal(o.motion, LSM_MOTION_NONE);
   assert_int_equal(o.align, LSM_ALIGN_AUTO);
@@ -280,15 +363,15 @@ static void test_default(void **state) {
   lsm_stack_opts_resolve(&o);
   assert_int_equal(o.motion, LSM_MOTION_FIELD);
   assert_int_equal(o.align, LSM_ALIGN_NONE);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 6; ++k) {
     lsm_stack_opts_default(&o);
-    o.motion = LSM_MOTION_FIELD;
-    if (k == 0) o.method = LSM_METHOD_BLEND;
-    if (k == 1) o.per_iteration = 1;
-    if (k == 2) o.align = LSM_ALIGN_HULL;
+    o.motion = k < 3 ? LSM_MOTION_FIELD : LSM_MOTION_AUTO;
+    if (k % 3 == 0) o.method = LSM_METHOD_BLEND;
+    if (k % 3 == 1) o.per_iteration = 1;
+    if (k % 3 == 2) o.align = LSM_ALIGN_HULL;
     lsm_stack_opts_resolve(&o);
     assert_int_equal(o.motion, LSM_MOTION_NONE);
-    assert_int_equal(o.align, k == 2 ? LSM_ALIGN_HULL : LSM_ALIGN_AUTO);
+    assert_int_equal(o.align, k % 3 == 2 ? LSM_ALIGN_HULL : LSM_ALIGN_AUTO);
   }
 }
 
@@ -392,6 +475,8 @@ int main(void) {
       cmocka_unit_test(test_still_is_plain),
       cmocka_unit_test(test_turning),
       cmocka_unit_test(test_default),
+      cmocka_unit_test(test_auto_turning),
+      cmocka_unit_test(test_auto_in_place),
       cmocka_unit_test(test_pairing_needs),
       cmocka_unit_test(test_appearing_is_plain),
       cmocka_unit_test(test_still_beside_moving),

@@ -70,7 +70,7 @@ static lsm_status stack_options(const lsmorph_options *o, lsm_stack_opts *so, in
   *ends_given = o->ends != NULL;
   ENUM_OPTION(align, lsm_align_from_name, v, "align", "hull, none, auto");
   if (o->align) so->align = (lsm_align)v;
-  ENUM_OPTION(motion, lsm_motion_from_name, v, "motion", "none, field");
+  ENUM_OPTION(motion, lsm_motion_from_name, v, "motion", "auto, field, none");
   if (o->motion) so->motion = (lsm_motion_mode)v;
   ENUM_OPTION(scheme, lsm_scheme_from_name, v, "scheme", "upwind, roe-fix, weno5");
   if (o->scheme) so->morph.scheme = (lsm_scheme)v;

@@ -73,7 +73,9 @@ typedef struct lsmorph_options {
   int threads;           /* 0: all cores */
   const char *backend;   /* "c" (default), "opencl", "auto" */
   int device;            /* OpenCL device index, -1: the first GPU, else device 0 */
-  const char *motion;    /* "none" (default), "field" (the correspondence field, ls and pls) */
+  const char *motion;    /* "auto" (default: per pair, the field where it predicts the stack's
+                            own slices better), "field" (the correspondence field, ls and pls),
+                            "none" (in place) */
 } lsmorph_options;
 
 LSMORPH_API void lsmorph_options_default(lsmorph_options *o);

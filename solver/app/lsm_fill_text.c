@@ -42,7 +42,7 @@ static const char fill_help[] =
     "\n"
     "Method (as for 'lsmorph help reconstruct'):\n"
     "  --method ls|pls|blend, --interp cubic|linear, --align auto|hull|none,\n"
-    "  --motion none|field, --scheme, --time, --cfl, --reinit-every, --reinit-iters,\n"
+    "  --motion auto|field|none, --scheme, --time, --cfl, --reinit-every, --reinit-iters,\n"
     "  --max-iter, --particles-per-cell, --pls-reseed, --pls-radius-adjust, --seed,\n"
     "  --rules-off\n"
     "  --ends halfway|tip|auto  default halfway: the drawn slices were placed without\n"
@@ -161,9 +161,11 @@ static const char fill_xml_method[] =
          DEF("halfway") EL("halfway") EL("tip") EL("auto"))
     ENUM("align", "Alignment", "Centroid alignment of sections that moved",
          DEF("auto") EL("auto") EL("hull") EL("none"))
-    ENUM("motion", "Motion", "field: parts that moved or turned off themselves follow a "
-         "registration of the two slices (replaces auto alignment); none: in place",
-         DEF("none") EL("none") EL("field"))
+    ENUM("motion", "Motion", "auto: per pair of drawn slices, the field where it predicts the "
+         "drawn slices better when each is left out; field: parts that moved or turned off "
+         "themselves follow a registration of the two slices (replaces auto alignment); "
+         "none: in place",
+         DEF("auto") EL("auto") EL("field") EL("none"))
     ENUM("scheme", "Scheme", "Numerical Hamiltonian", DEF("upwind") EL("upwind") EL("roe-fix")
          EL("weno5"))
     ENUM("time", "Time integrator", "Euler or TVD Runge-Kutta", DEF("euler") EL("euler") EL("rk2")

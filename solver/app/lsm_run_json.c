@@ -152,12 +152,16 @@ static void write_pairs(FILE *f, const lsm_run_record *run) {
             json_bool(p->hit_max_iter), p->rank);
     fprintf(f, ", \"aligned\": %s, \"moving_parts\": %d", json_bool(p->aligned),
             p->moving_parts);
-    if (o->motion == LSM_MOTION_FIELD) {
+    if (o->motion != LSM_MOTION_NONE) {
       fputs(", \"motion\": {\"max_displacement\": ", f);
       lsm_json_number(f, p->motion_max_px);
       fprintf(f, ", \"registration_iterations\": %d, \"registration_seconds\": ",
               p->motion_iterations);
       lsm_json_number(f, p->motion_seconds);
+      fprintf(f, ", \"field\": %s", json_bool(p->motion_field));
+      if (o->motion == LSM_MOTION_AUTO)
+        fprintf(f, ", \"left_out\": %d, \"missed_with_field\": %lld, \"missed_in_place\": %lld",
+                p->motion_tests, p->motion_missed_field, p->motion_missed_in_place);
       fputs("}", f);
     }
     if (o->method == LSM_METHOD_PLS) {

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "solver/recon/lsm_choose.h"
 #include "solver/recon/lsm_pairing.h"
 
 typedef struct flow_slot {
@@ -12,18 +13,33 @@ typedef struct flow_slot {
   lsm_motion_field *field; /* NULL until computed, when no part takes it, after it is freed */
   int done;                /* decided (field set or none needed) */
   int finished;            /* gaps of this process beside it that have finished */
+  int chosen;              /* --motion auto: the choice is made (lsm_choose) */
+  lsm_choice choice;       /* --motion auto's choice (field always set with --motion field) */
 } flow_slot;
+
+/* --motion auto: one input slice left out and predicted (lsm_choose), for the two pairs
+ * beside it. */
+typedef struct left_out_slot {
+  omp_lock_t lock;
+  int done;
+  long long missed_field, missed_in_place;
+} left_out_slot;
 
 struct lsm_flows {
   size_t pairs;
   int rank, size;
+  const lsm_slice_source *src; /* the run's slices, for --motion auto's choice */
   flow_slot *slots;
+  left_out_slot *left_out; /* one per input slice (--motion auto) */
 };
 
-lsm_status lsm_flows_create(size_t pairs, int rank, int size, lsm_flows **out, lsm_err *err) {
+lsm_status lsm_flows_create(const lsm_slice_source *src, int rank, int size, lsm_flows **out,
+                            lsm_err *err) {
+  const size_t pairs = src->count - 1;
   lsm_flows *f = lsm_alloc(1, sizeof *f, err, "field cache");
   if (!f) return err ? err->status : LSM_ERR_NOMEM;
   f->pairs = pairs;
+  f->src = src;
   f->rank = rank;
   f->size = size < 1 ? 1 : size;
   f->slots = lsm_alloc(pairs ? pairs : 1, sizeof *f->slots, err, "field cache");
@@ -31,11 +47,23 @@ lsm_status lsm_flows_create(size_t pairs, int rank, int size, lsm_flows **out, l
     free(f);
     return err ? err->status : LSM_ERR_NOMEM;
   }
+  f->left_out = lsm_alloc(pairs + 1, sizeof *f->left_out, err, "field cache");
+  if (!f->left_out) {
+    free(f->slots);
+    free(f);
+    return err ? err->status : LSM_ERR_NOMEM;
+  }
+  for (size_t k = 0; k <= pairs; ++k) {
+    omp_init_lock(&f->left_out[k].lock);
+    f->left_out[k].done = 0;
+  }
   for (size_t k = 0; k < pairs; ++k) {
     omp_init_lock(&f->slots[k].lock);
     f->slots[k].field = NULL;
     f->slots[k].done = 0;
     f->slots[k].finished = 0;
+    f->slots[k].chosen = 0;
+    f->slots[k].choice = (lsm_choice){.field = 1};
   }
   *out = f;
   return LSM_OK;
@@ -48,6 +76,8 @@ void lsm_flows_destroy(lsm_flows **flows) {
     lsm_motion_field_destroy(&f->slots[k].field);
     omp_destroy_lock(&f->slots[k].lock);
   }
+  for (size_t k = 0; k <= f->pairs; ++k) omp_destroy_lock(&f->left_out[k].lock);
+  free(f->left_out);
   free(f->slots);
   free(f);
   *flows = NULL;
@@ -61,6 +91,72 @@ void lsm_flows_params(const lsm_stack_opts *o, lsm_motion_params *p) {
   lsm_backend_motion(o->morph.backend, &p->device); /* a device backend registers there */
 }
 
+/* The two slices' phi on the fields' canvas and their parts (rule field-parts; NULL when the
+ * rule is off); *needs: some part may take the field. */
+static lsm_status pair_parts(const lsm_slice *a, const lsm_slice *b, const lsm_stack_opts *o,
+                             int width, int height, lsm_grid **pa, lsm_grid **pb,
+                             lsm_pairing **parts, int *needs, lsm_err *err) {
+  const int pad = LSM_FLOWS_PAD;
+  const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
+  *needs = 1;
+  LSM_TRY(lsm_grid_create(width + 2 * pad, height + 2 * pad, hx, hy, pa, err));
+  LSM_TRY(lsm_grid_create(width + 2 * pad, height + 2 * pad, hx, hy, pb, err));
+  LSM_TRY(lsm_slice_phi(a, o, pad, pad, *pa, err));
+  LSM_TRY(lsm_slice_phi(b, o, pad, pad, *pb, err));
+  if (!lsm_rule_on(&o->rules, LSM_RULE_FIELD_PARTS)) return LSM_OK;
+  return lsm_pairing_create(&a->filled, &b->filled, *pa, *pb, pad, parts, needs, err);
+}
+
+/* --motion auto, under the slot's lock: a pair where some part may take the field is
+ * tried on the stack's own slices (lsm_choose); the others stay in place untried. */
+static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
+                         const lsm_stack_opts *o, int width, int height, int threads,
+                         flow_slot *slot, lsm_err *err) {
+  if (slot->chosen) return LSM_OK;
+  slot->choice = (lsm_choice){0};
+  lsm_status st = LSM_OK;
+  if (!a->empty && !b->empty) {
+    lsm_grid *pa = NULL, *pb = NULL;
+    lsm_pairing *parts = NULL;
+    int needs = 0;
+    st = pair_parts(a, b, o, width, height, &pa, &pb, &parts, &needs, err);
+    lsm_pairing_destroy(&parts);
+    lsm_grid_destroy(&pa);
+    lsm_grid_destroy(&pb);
+    for (size_t j = pair; st == LSM_OK && needs && j <= pair + 1; ++j) {
+      if (!lsm_choose_can_leave_out(flows->src, j)) continue;
+      left_out_slot *lo = &flows->left_out[j];
+      omp_set_lock(&lo->lock); /* the pair beside may be testing it */
+      if (!lo->done)
+        st = lsm_choose_left_out(flows->src, j, width, height, o, threads, &lo->missed_field,
+                                 &lo->missed_in_place, err);
+      lo->done = st == LSM_OK;
+      if (st == LSM_OK) {
+        slot->choice.tests++;
+        slot->choice.missed_field += lo->missed_field;
+        slot->choice.missed_in_place += lo->missed_in_place;
+      }
+      omp_unset_lock(&lo->lock);
+    }
+    lsm_choose_decide(&slot->choice);
+  }
+  slot->chosen = st == LSM_OK;
+  return st;
+}
+
+lsm_status lsm_flows_choice(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
+                            const lsm_stack_opts *o, int width, int height, int threads,
+                            lsm_choice *choice, lsm_err *err) {
+  flow_slot *slot = &flows->slots[pair];
+  omp_set_lock(&slot->lock);
+  const lsm_status st = o->motion == LSM_MOTION_AUTO
+                            ? choose(flows, pair, a, b, o, width, height, threads, slot, err)
+                            : LSM_OK;
+  *choice = slot->choice;
+  omp_unset_lock(&slot->lock);
+  return st;
+}
+
 lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
                          const lsm_stack_opts *o, int width, int height, int threads,
                          const lsm_motion_field **field, lsm_err *err) {
@@ -68,19 +164,12 @@ lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
   lsm_status st = LSM_OK;
   omp_set_lock(&slot->lock);
   if (!slot->done) {
-    const int pad = LSM_FLOWS_PAD;
-    const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
     lsm_grid *pa = NULL, *pb = NULL;
     lsm_pairing *parts = NULL;
-    st = lsm_grid_create(width + 2 * pad, height + 2 * pad, hx, hy, &pa, err);
-    if (st == LSM_OK) st = lsm_grid_create(width + 2 * pad, height + 2 * pad, hx, hy, &pb, err);
-    if (st == LSM_OK) st = lsm_slice_phi(a, o, pad, pad, pa, err);
-    if (st == LSM_OK) st = lsm_slice_phi(b, o, pad, pad, pb, err);
     /* rule field-parts: only a pair where some part may take the field is registered */
     const int per_part = lsm_rule_on(&o->rules, LSM_RULE_FIELD_PARTS);
     int needs = 1, taken = 1;
-    if (st == LSM_OK && per_part)
-      st = lsm_pairing_create(&a->filled, &b->filled, pa, pb, pad, &parts, &needs, err);
+    st = pair_parts(a, b, o, width, height, &pa, &pb, &parts, &needs, err);
     lsm_motion_params p;
     lsm_flows_params(o, &p);
     if (st == LSM_OK && needs) st = lsm_motion_register(pa, pb, &p, threads, &slot->field, err);

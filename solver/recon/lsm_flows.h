@@ -13,13 +13,16 @@
 
 #include "solver/base/lsm_status.h"
 #include "solver/motion/lsm_motion.h"
+#include "solver/recon/lsm_choose.h"
 #include "solver/recon/lsm_slice.h"
 #include "solver/recon/lsm_stack.h"
 
 typedef struct lsm_flows lsm_flows;
 
-/* The cache of a stack of pairs + 1 slices whose gaps g with g % size == rank run here. */
-lsm_status lsm_flows_create(size_t pairs, int rank, int size, lsm_flows **out, lsm_err *err);
+/* The cache of the stack src (its count - 1 pairs), whose gaps g with g % size == rank run
+ * here.  src is kept for --motion auto's choices (lsm_choose). */
+lsm_status lsm_flows_create(const lsm_slice_source *src, int rank, int size, lsm_flows **out,
+                            lsm_err *err);
 void lsm_flows_destroy(lsm_flows **flows);
 
 /* The margin of the canvas the fields are computed on (an unaligned gap's). */
@@ -28,11 +31,19 @@ void lsm_flows_destroy(lsm_flows **flows);
 /* The field of pair `pair`, a and b its two slices (loaded), on the canvas of an unaligned
  * gap (width + 2 LSM_FLOWS_PAD by height + 2 LSM_FLOWS_PAD); computed on first use with
  * `threads` threads, weighed per part (lsm_pairing, rule field-parts).  *field is NULL
- * where no part takes it (the pair stays in place).  Valid until the gaps that read it
+ * where no part takes it.  With --motion auto a pair chosen in place still has its field:
+ * the gaps beside it that take theirs carry their neighbours along it.  Valid until the gaps that read it
  * are done. */
 lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
                          const lsm_stack_opts *o, int width, int height, int threads,
                          const lsm_motion_field **field, lsm_err *err);
+
+/* Whether pair `pair` (its slices a and b, loaded) takes the field: with --motion field
+ * always; with --motion auto the leave-one-out choice, made on first use (by this call or
+ * lsm_flows_get) and kept. */
+lsm_status lsm_flows_choice(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
+                            const lsm_stack_opts *o, int width, int height, int threads,
+                            lsm_choice *choice, lsm_err *err);
 
 /* Gap `gap` has finished (also on failure): fields nobody here will read again are freed. */
 void lsm_flows_gap_done(lsm_flows *flows, size_t gap);

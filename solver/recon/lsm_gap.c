@@ -174,7 +174,12 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
                          lsm_flows *flows, int threads, lsm_gap *g, lsm_err *err) {
   memset(g, 0, sizeof *g);
   const lsm_slice *a = w->s[1], *b = w->s[2];
-  LSM_TRY(lsm_frame_setup(&g->f, w, o->align, o->interp, width, height, o->pixel_dx,
+  /* --motion field or auto: whether this pair takes the field (auto: lsm_choose); a pair
+   * that does runs unaligned, one that does not as with --motion none */
+  if (flows && !a->empty && !b->empty && !o->per_iteration)
+    LSM_TRY(lsm_flows_choice(flows, w->gap, a, b, o, width, height, threads, &g->choice, err));
+  const lsm_align align = g->choice.field && o->align == LSM_ALIGN_AUTO ? LSM_ALIGN_NONE : o->align;
+  LSM_TRY(lsm_frame_setup(&g->f, w, align, o->interp, width, height, o->pixel_dx,
                           o->pixel_dy, &o->rules, err));
   const int nx = width + 2 * g->f.pad, ny = height + 2 * g->f.pad_y;
   const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
@@ -183,8 +188,7 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
   const lsm_frame *f = &g->f;
   if (st == LSM_OK) st = lsm_slice_phi(a, o, f->pad - f->dx[1], f->pad_y - f->dy[1], g->phi_a, err);
   if (st == LSM_OK) st = lsm_slice_phi(b, o, f->pad - f->dx[2], f->pad_y - f->dy[2], g->phi_b, err);
-  if (st == LSM_OK && flows && o->motion == LSM_MOTION_FIELD && !a->empty && !b->empty &&
-      !o->per_iteration && f->pad == LSM_FLOWS_PAD && f->pad_y == LSM_FLOWS_PAD)
+  if (st == LSM_OK && g->choice.field && f->pad == LSM_FLOWS_PAD && f->pad_y == LSM_FLOWS_PAD)
     st = gap_moving(o, width, height, w, flows, threads, g, err);
   if (st == LSM_OK && !g->moving && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
       o->input == LSM_INPUT_MASK && !o->per_iteration && !f->aligned &&

@@ -33,6 +33,7 @@ typedef struct lsm_gap {
   int rest_empty; /* every part of both slices moved: the rest is empty */
   /* --motion field: phi_a, phi_b (and the neighbours read by the rules and the slopes) in
    * the mid frame of the gap's field; each output slice carried to its place (lsm_moving) */
+  lsm_choice choice; /* whether the pair takes the field (lsm_flows_choice; 0 without flows) */
   int moving;
   lsm_moving mv;
   lsm_grid *carried; /* an output slice carried to its fraction, on the canvas */

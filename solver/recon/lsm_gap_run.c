@@ -104,6 +104,10 @@ lsm_status lsm_gap_run(lsm_run *r, const lsm_window *w, const double *zs,
   ps->cells = (long long)g.phi_a->nx * g.phi_a->ny;
   ps->aligned = g.f.aligned || g.f.end_aligned; /* an end moving on with the pair beyond */
   ps->moving_parts = g.parts;
+  ps->motion_tests = g.choice.tests;
+  ps->motion_field = g.moving;
+  ps->motion_missed_field = g.choice.missed_field;
+  ps->motion_missed_in_place = g.choice.missed_in_place;
   if (g.moving) {
     ps->motion_iterations = g.mv.w->iterations;
     ps->motion_seconds = g.mv.w->seconds;

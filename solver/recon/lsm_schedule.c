@@ -323,8 +323,8 @@ lsm_status lsm_schedule_run(lsm_run *r, lsm_pair_stats *stats, lsm_err *err) {
       st == LSM_OK && !distributed ? lsm_schedule_gap_workers(opts, width, height, gaps, most_slices)
                                    : 1;
   r->gap_workers = workers;
-  if (st == LSM_OK && opts->motion == LSM_MOTION_FIELD)
-    st = lsm_flows_create(gaps, distributed ? opts->transport->rank : 0,
+  if (st == LSM_OK && opts->motion != LSM_MOTION_NONE)
+    st = lsm_flows_create(src, distributed ? opts->transport->rank : 0,
                           distributed ? opts->transport->size : 1, &r->flows, err);
   if (st == LSM_OK && distributed) {
     st = run_distributed(r, plan, &grid, stats, err);

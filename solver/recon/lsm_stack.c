@@ -21,7 +21,7 @@ LSM_NAME_FUNCTIONS(lsm_end_rule, LSM_ENDS_LIST, lsm_end_rule_name, lsm_end_rule_
 
 void lsm_stack_opts_default(lsm_stack_opts *opts) {
   *opts = (lsm_stack_opts){.method = LSM_METHOD_LS, .input = LSM_INPUT_MASK,
-                           .align = LSM_ALIGN_AUTO, .motion = LSM_MOTION_NONE,
+                           .align = LSM_ALIGN_AUTO, .motion = LSM_MOTION_AUTO,
                            .interp = LSM_INTERP_CUBIC, .ends = LSM_ENDS_AUTO, .pixel_dx = 1.0,
                            .pixel_dy = 1.0, .dz = 0.0 /* the pixel size */, .tol = 0.25,
                            .max_iter = 100000};
@@ -40,9 +40,9 @@ void lsm_stack_opts_resolve(lsm_stack_opts *opts) {
   if (opts->per_iteration) opts->interp = LSM_INTERP_LINEAR;
   /* the field is for ls and pls in default mode: blend stays the textbook, --per-iteration
    * and --align hull the document's modes (the command line refuses --motion field there) */
-  if (opts->motion == LSM_MOTION_FIELD && lsm_stack_field_excluded_by(opts))
+  if (opts->motion != LSM_MOTION_NONE && lsm_stack_field_excluded_by(opts))
     opts->motion = LSM_MOTION_NONE;
-  /* the field replaces --align auto's alignment */
+  /* the field replaces --align auto's alignment (auto: in the pairs that take it) */
   if (opts->motion == LSM_MOTION_FIELD && opts->align == LSM_ALIGN_AUTO) opts->align = LSM_ALIGN_NONE;
   if (opts->interp == LSM_INTERP_LINEAR) opts->ends = LSM_ENDS_HALFWAY;
 }

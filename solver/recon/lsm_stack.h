@@ -88,10 +88,12 @@ LSM_ENUM(lsm_align, LSM_ALIGN, LSM_ALIGN_LIST, lsm_align_name,
          lsm_align_from_name);
 
 /* The correspondence field (solver/README.md §9): field, each gap in the moving frame of a
- * symmetric diffeomorphic registration of its two slices; none, in place. */
+ * symmetric diffeomorphic registration of its two slices; none, in place; auto, per pair
+ * the one that predicts the stack's own slices better, left out one at a time (lsm_choose). */
 #define LSM_MOTION_LIST(X)                                                      \
   X(LSM_MOTION_FIELD, "field")                                                  \
-  X(LSM_MOTION_NONE, "none")
+  X(LSM_MOTION_NONE, "none")                                                    \
+  X(LSM_MOTION_AUTO, "auto")
 LSM_ENUM(lsm_motion_mode, LSM_MOTION, LSM_MOTION_LIST, lsm_motion_name,
          lsm_motion_from_name);
 
@@ -119,8 +121,8 @@ typedef struct lsm_stack_opts {
   lsm_method method;
   lsm_input_kind input;
   lsm_align align;
-  lsm_motion_mode motion; /* the correspondence field (default none; field only for ls and
-                          * pls in default mode: lsm_stack_opts_resolve) */
+  lsm_motion_mode motion; /* the correspondence field (default auto; field and auto only for
+                          * ls and pls in default mode: lsm_stack_opts_resolve) */
   lsm_interp interp;   /* z-profile (default cubic) */
   lsm_end_rule ends;   /* how the cubic profile ends an object (default auto) */
   double pixel_dx;     /* physical width of a pixel: the step along a row, x (default 1) */
@@ -144,7 +146,7 @@ void lsm_stack_opts_default(lsm_stack_opts *opts);
  * lsm_stack_run applies this to its own copy; callers that record the options
  * (run.json) apply it first. */
 void lsm_stack_opts_resolve(lsm_stack_opts *opts);
-/* The mode that rules out the correspondence field (blend, the textbook; --per-iteration and
+/* The mode that rules out the correspondence field (and auto's choice of it) (blend, the textbook; --per-iteration and
  * --align hull, the document's modes): its option name, or NULL when the field can run. */
 const char *lsm_stack_field_excluded_by(const lsm_stack_opts *opts);
 
@@ -185,6 +187,10 @@ typedef struct lsm_pair_stats {
   int motion_iterations;  /* the registration of the pair's field: iterations at all levels */
   double motion_seconds;  /* its time */
   double motion_max_px;   /* the field's largest displacement, pixels (0: no field) */
+  int motion_tests;       /* --motion auto: slices left out to choose (0: not tried) */
+  int motion_field;       /* 1: the pair takes the field (auto's choice, or --motion field) */
+  long long motion_missed_field, motion_missed_in_place; /* pixels the left-out predictions
+                                                            missed, with and without it */
   /* --method pls (both morphs of a two-sided pair added up) */
   long long pls_seeded;     /* particles seeded */
   long long pls_discarded;  /* dropped by attraction (and leaving the grid) */
