@@ -103,16 +103,12 @@ static const help_row reconstruct_rows[] = {
                                  "(halfway); default auto: tip beside the first\n"
                                  "and last slice given, halfway elsewhere"),
     CHOOSE("--align", align_names, "move slices by their convex-hull centroids:\n"
-                                   "pairs whose shape moved (auto, the default,\n"
-                                   "where the pair stays in place), every pair\n"
-                                   "(hull), none"),
-    CHOOSE("--motion", motion_names, "field: parts that moved off themselves follow a\n"
-                                     "registration, the rest morph in place (ls, pls;\n"
-                                     "replaces --align auto; not with hull or\n"
-                                     "--per-iteration); none: in place; auto (the\n"
-                                     "default): per pair, whichever of the two\n"
-                                     "predicts the stack's own slices better when\n"
-                                     "each is left out (run.json: motion)"),
+                                   "pairs whose shape moved (auto, the default),\n"
+                                   "every pair (hull), none"),
+    CHOOSE("--motion", motion_names, "auto (default): field in the pairs where it\n"
+                                     "predicts the slices left out better; field:\n"
+                                     "parts that moved follow a registration (ls,\n"
+                                     "pls; not with hull, --per-iteration); none"),
     OPT("--rules-off NAME,...", "switch reconstruction rules off, for experiments\n"
                                "('lsmorph help rules' lists them)"),
     CHOOSE("--scheme", scheme_names, "numerical Hamiltonian\n"

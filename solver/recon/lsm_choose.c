@@ -95,5 +95,5 @@ lsm_status lsm_choose_left_out(const lsm_slice_source *src, size_t j, int width,
 }
 
 void lsm_choose_decide(lsm_choice *c) {
-  c->field = c->tests > 0 && c->missed_field < c->missed_in_place;
+  c->field = c->tests > 0 && c->field_better == c->tests;
 }

@@ -4,9 +4,9 @@
  * seen in the gap, but it can be tried where the answer is known: each end slice of the
  * pair that has input slices on both sides is left out and reconstructed from the (up to)
  * four nearest others, once with --motion field and once with --motion none; the pair
- * takes the field when those predictions miss fewer pixels of the left-out slices in all
- * (leave-one-out; solver/README.md §9).  No constant: a tie or no slice to leave out keeps
- * the pair in place.
+ * takes the field when it predicted each left-out slice better, missing fewer of its pixels
+ * (leave-one-out; solver/README.md §9).  No constant: a tie, a slice the field predicted no
+ * better, or no slice to leave out keeps the pair in place.
  */
 #ifndef LSM_CHOOSE_H
 #define LSM_CHOOSE_H
@@ -19,6 +19,7 @@
 typedef struct lsm_choice {
   int field;                 /* 1: the pair takes the field */
   int tests;                 /* slices left out (0, 1 or 2) */
+  int field_better;          /* of those, the slices the field predicted better */
   long long missed_field;    /* pixels the field's predictions got wrong, over the tests */
   long long missed_in_place; /* the same in place */
 } lsm_choice;
@@ -33,7 +34,8 @@ lsm_status lsm_choose_left_out(const lsm_slice_source *src, size_t j, int width,
                                const lsm_stack_opts *o, int threads, long long *missed_field,
                                long long *missed_in_place, lsm_err *err);
 
-/* The choice from the tests of a pair's end slices, added up in *c (field set here). */
+/* The choice from the tests of a pair's end slices, added up in *c (field set here): the
+ * field when it predicted every slice left out better. */
 void lsm_choose_decide(lsm_choice *c);
 
 #endif

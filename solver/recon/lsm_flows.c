@@ -123,7 +123,10 @@ static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
     lsm_pairing_destroy(&parts);
     lsm_grid_destroy(&pa);
     lsm_grid_destroy(&pb);
-    for (size_t j = pair; st == LSM_OK && needs && j <= pair + 1; ++j) {
+    /* until a slice the field predicts no better: the pair then stays in place */
+    for (size_t j = pair; st == LSM_OK && needs && j <= pair + 1 &&
+                          slot->choice.field_better == slot->choice.tests;
+         ++j) {
       if (!lsm_choose_can_leave_out(flows->src, j)) continue;
       left_out_slot *lo = &flows->left_out[j];
       omp_set_lock(&lo->lock); /* the pair beside may be testing it */
@@ -133,6 +136,7 @@ static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
       lo->done = st == LSM_OK;
       if (st == LSM_OK) {
         slot->choice.tests++;
+        slot->choice.field_better += lo->missed_field < lo->missed_in_place;
         slot->choice.missed_field += lo->missed_field;
         slot->choice.missed_in_place += lo->missed_in_place;
       }
