@@ -344,6 +344,22 @@ static void test_auto_in_place(void **state) {
   }
 }
 
+/* Heights 0, 1e-9, 10, 11 (a disc jumping along): predicting slice 2 (at 1e-9) from the
+ * others would take output steps of 1e-9, ten billion slices where the run writes twelve
+ * (the run failed for memory), so it is not left out; the run goes through. */
+static void test_auto_uneven(void **state) {
+  (void)state;
+  const disc d[4] = {{16, 32, 6, 0, 0}, {36, 32, 6, 0, 0}, {56, 32, 6, 0, 0}, {76, 32, 6, 0, 0}};
+  const double z[4] = {0, 1e-9, 10, 11};
+  stack_ctx c;
+  lsm_pair_stats st[3];
+  memset(st, 0, sizeof st);
+  run_default(d, z, 4, LSM_MOTION_AUTO, &c, st);
+  assert_int_equal(c.n, 12);
+  for (int p = 0; p < 3; ++p) assert_true(st[p].motion_tests <= 1);
+  free(c.out);
+}
+
 /* The default is auto, which keeps --align auto for the pairs it leaves in place; the
  * field, asked for everywhere, is for ls and pls in default mode (--align auto becomes none);
  * blend (the textbook), --per-iteration and --align hull run in place, under auto too. */
@@ -477,6 +493,7 @@ int main(void) {
       cmocka_unit_test(test_default),
       cmocka_unit_test(test_auto_turning),
       cmocka_unit_test(test_auto_in_place),
+      cmocka_unit_test(test_auto_uneven),
       cmocka_unit_test(test_pairing_needs),
       cmocka_unit_test(test_appearing_is_plain),
       cmocka_unit_test(test_still_beside_moving),

@@ -45,10 +45,8 @@ static lsm_status miss_emit(void *ctx, const float *phi, int width, int height, 
   return LSM_OK;
 }
 
-/* Slice j of src left out and predicted with `motion`: the pixels missed. */
-static lsm_status predict(const lsm_slice_source *src, size_t j, const lsm_mask *truth, int width,
-                          int height, const lsm_stack_opts *o, lsm_motion_mode motion,
-                          int threads, long long *missed, lsm_err *err) {
+/* The up to four nearest slices around j, without it. */
+static sub_source window(const lsm_slice_source *src, size_t j) {
   sub_source sub = {.parent = src};
   for (size_t k = j >= 2 ? j - 2 : 0; k <= j + 2 && k < src->count; ++k)
     if (k != j) {
@@ -56,12 +54,25 @@ static lsm_status predict(const lsm_slice_source *src, size_t j, const lsm_mask 
       sub.z[sub.count] = src->z[k];
       sub.count++;
     }
+  return sub;
+}
+
+/* The output step of the run predicting slice j: from the first slice kept through the
+ * left-out height, so that with even spacing no output lies inside the other gaps, which are
+ * then not morphed. */
+static double window_dz(const lsm_slice_source *src, size_t j, const sub_source *sub) {
+  return src->z[j] - sub->z[0];
+}
+
+/* Slice j of src left out and predicted with `motion`: the pixels missed. */
+static lsm_status predict(const lsm_slice_source *src, size_t j, const lsm_mask *truth, int width,
+                          int height, const lsm_stack_opts *o, lsm_motion_mode motion,
+                          int threads, long long *missed, lsm_err *err) {
+  sub_source sub = window(src, j);
   const lsm_slice_source source = {&sub, sub.count, sub.z, sub_load, sub_name};
   lsm_stack_opts so = *o;
   so.motion = motion;
-  /* the output grid from the first slice kept, through the left-out height: with even
-   * spacing no output lies inside the other gaps, which are then not morphed */
-  so.dz = src->z[j] - sub.z[0];
+  so.dz = window_dz(src, j, &sub);
   so.transport = NULL;
   so.morph.threads = threads;
   const double span = src->z[j + 1] - src->z[j - 1];
@@ -74,14 +85,20 @@ static lsm_status predict(const lsm_slice_source *src, size_t j, const lsm_mask 
   return LSM_OK;
 }
 
-int lsm_choose_can_leave_out(const lsm_slice_source *src, size_t j) {
-  return j > 0 && j + 1 < src->count;
+int lsm_choose_can_leave_out(const lsm_slice_source *src, size_t j, const lsm_stack_opts *o) {
+  if (j == 0 || j + 1 >= src->count) return 0;
+  /* uneven heights can make that step finer than the run's own: then the prediction would
+   * write more slices than the run does over the same heights (a step of 0.001 between
+   * slices 1000 apart, a million), and the slice is not left out */
+  const sub_source sub = window(src, j);
+  const size_t asked = lsm_stack_output_count(sub.z, sub.count, window_dz(src, j, &sub));
+  return asked <= lsm_stack_output_count(sub.z, sub.count, lsm_stack_output_dz(o));
 }
 
 lsm_status lsm_choose_left_out(const lsm_slice_source *src, size_t j, int width, int height,
                                const lsm_stack_opts *o, int threads, long long *missed_field,
                                long long *missed_in_place, lsm_err *err) {
-  if (!lsm_choose_can_leave_out(src, j))
+  if (!lsm_choose_can_leave_out(src, j, o))
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "leave-one-out: slice %zu has no two sides", j);
   lsm_slice left_out;
   LSM_TRY(lsm_slice_load(src, j, width, height, o->input, &left_out, err));

@@ -24,8 +24,9 @@ typedef struct lsm_choice {
   long long missed_in_place; /* the same in place */
 } lsm_choice;
 
-/* Whether input slice j of src can be left out: it has slices on both sides. */
-int lsm_choose_can_leave_out(const lsm_slice_source *src, size_t j);
+/* Whether input slice j of src can be left out: it has slices on both sides, and predicting
+ * it writes no more output slices than the run (options o) does over the same heights. */
+int lsm_choose_can_leave_out(const lsm_slice_source *src, size_t j, const lsm_stack_opts *o);
 
 /* Slice j of src (width x height slices) left out and predicted from the up to four
  * nearest others with --motion field and with --motion none: the pixels each prediction

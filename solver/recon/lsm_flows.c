@@ -127,7 +127,7 @@ static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
     for (size_t j = pair; st == LSM_OK && needs && j <= pair + 1 &&
                           slot->choice.field_better == slot->choice.tests;
          ++j) {
-      if (!lsm_choose_can_leave_out(flows->src, j)) continue;
+      if (!lsm_choose_can_leave_out(flows->src, j, o)) continue;
       left_out_slot *lo = &flows->left_out[j];
       omp_set_lock(&lo->lock); /* the pair beside may be testing it */
       if (!lo->done)
