@@ -163,33 +163,48 @@ static lsm_status sink_emit(void *ctx, const float *phi, int width, int height, 
   return LSM_OK;
 }
 
-/* Runs slices d (and c->also, set by the caller or NULL) with default options but
- * --align none, --motion motion and, with whole, the rule field-parts off. */
-static void run_rules(const disc *d, const double *z, size_t count, lsm_motion_mode motion,
-                      int whole, stack_ctx *c) {
-  lsm_stack_opts o;
-  lsm_stack_opts_default(&o);
-  o.align = LSM_ALIGN_NONE;
-  o.motion = motion;
+/* Runs slices d (and c->also, set by the caller or NULL) with options o on 2 threads; stats
+ * (count - 1 of them) gets each pair's. */
+static void run_opts(const disc *d, const double *z, size_t count, lsm_stack_opts o, stack_ctx *c,
+                     lsm_pair_stats *stats) {
   o.morph.threads = 2;
-  if (whole) o.rules.off |= (uint64_t)1 << LSM_RULE_FIELD_PARTS;
   c->d = d;
   c->n = 0;
   c->out = malloc(sizeof(float) * SW * SH * 64);
   assert_non_null(c->out);
   lsm_slice_source src = {c, count, z, src_load, NULL};
   lsm_slice_sink sink = {c, sink_emit};
-  lsm_pair_stats stats[8];
   lsm_err err;
   lsm_err_clear(&err);
   assert_int_equal(lsm_stack_run(&src, SW, SH, &o, &sink, stats, NULL, &err), LSM_OK);
   c->max_px = stats[0].motion_max_px;
 }
 
+/* Runs slices d (and c->also) with default options but --align none, --motion motion and,
+ * with whole, the rule field-parts off. */
+static void run_rules(const disc *d, const double *z, size_t count, lsm_motion_mode motion,
+                      int whole, stack_ctx *c) {
+  lsm_stack_opts o;
+  lsm_stack_opts_default(&o);
+  o.align = LSM_ALIGN_NONE;
+  o.motion = motion;
+  if (whole) o.rules.off |= (uint64_t)1 << LSM_RULE_FIELD_PARTS;
+  lsm_pair_stats stats[8];
+  run_opts(d, z, count, o, c, stats);
+}
+
 static void run(const disc *d, const double *z, size_t count, lsm_motion_mode motion,
                 stack_ctx *c) {
   c->also = NULL;
   run_rules(d, z, count, motion, 0, c);
+}
+
+/* Two runs gave the same slices, float for float; both freed. */
+static void same_and_free(stack_ctx *a, stack_ctx *b) {
+  assert_int_equal(a->n, b->n);
+  assert_memory_equal(a->out, b->out, sizeof(float) * SW * SH * a->n);
+  free(a->out);
+  free(b->out);
 }
 
 /* Slices that do not move: the field is zero and the output is the plain morph's, float for
@@ -201,10 +216,7 @@ static void test_still_is_plain(void **state) {
   stack_ctx field, none;
   run(d, z, 3, LSM_MOTION_FIELD, &field);
   run(d, z, 3, LSM_MOTION_NONE, &none);
-  assert_int_equal(field.n, none.n);
-  assert_memory_equal(field.out, none.out, sizeof(float) * SW * SH * field.n);
-  free(field.out);
-  free(none.out);
+  same_and_free(&field, &none);
 }
 
 /* Dice of output slice k against shape d. */
@@ -275,17 +287,8 @@ static void run_default(const disc *d, const double *z, size_t count, lsm_motion
   lsm_stack_opts o;
   lsm_stack_opts_default(&o);
   o.motion = motion;
-  o.morph.threads = 2;
-  c->d = d;
   c->also = NULL;
-  c->n = 0;
-  c->out = malloc(sizeof(float) * SW * SH * 64);
-  assert_non_null(c->out);
-  lsm_slice_source src = {c, count, z, src_load, NULL};
-  lsm_slice_sink sink = {c, sink_emit};
-  lsm_err err;
-  lsm_err_clear(&err);
-  assert_int_equal(lsm_stack_run(&src, SW, SH, &o, &sink, stats, NULL, &err), LSM_OK);
+  run_opts(d, z, count, o, c, stats);
 }
 
 /* The thin ellipse turning 40 degrees per gap over five slices: leaving each inner slice
@@ -311,10 +314,7 @@ static void test_auto_turning(void **state) {
     assert_true(sa[p].motion_missed_field < sa[p].motion_missed_in_place);
     assert_int_equal(sa[p].motion_field, 1);
   }
-  assert_int_equal(autoc.n, field.n);
-  assert_memory_equal(autoc.out, field.out, sizeof(float) * SW * SH * autoc.n);
-  free(autoc.out);
-  free(field.out);
+  same_and_free(&autoc, &field);
 }
 
 /* Where no part moved off itself (a disc growing in place) nothing is left out and the run
@@ -337,10 +337,7 @@ static void test_auto_in_place(void **state) {
       assert_int_equal(sa[p].motion_tests, 0);
       assert_int_equal(sa[p].motion_field, 0);
     }
-    assert_int_equal(autoc.n, none.n);
-    assert_memory_equal(autoc.out, none.out, sizeof(float) * SW * SH * autoc.n);
-    free(autoc.out);
-    free(none.out);
+    same_and_free(&autoc, &none);
   }
 }
 
