@@ -2,7 +2,7 @@
 # make bench: speed of the upwind update against NumPy, Roe-Fix, threads,
 # peak memory of a reconstruction with 10 and 60 slices, the share of the
 # previews and slice PNGs in a default run, the narrow band against the full
-# grid (tests/bench_morph.c, tests/bench_band.py), --motion field against none
+# grid (tests/bench_morph.c, tests/bench_band.py), --motion none, auto and field
 # (tests/bench_motion.py: the 2x bound, the registration's cells/s), and lsmorph fill on a
 # 512 x 512 x 200 label map against ITK's MorphologicalContourInterpolator.
 set -eu
@@ -78,7 +78,7 @@ $PY tests/bench_band.py "$BUILD/lsmorph" "$BUILD/bench-band" \
   ${LSMORPH_BENCH_BASE:+--base "$LSMORPH_BENCH_BASE"} ${MCI_DIR:+--mci "$MCI_DIR"}
 
 echo
-echo "== the correspondence field (--motion field against none; issue 53) =="
+echo "== the correspondence field (--motion none, auto (the default) and field; issue 53) =="
 # the bunny every 8th slice and the two 512^2 stand-ins bench_band.py made
 $PY tests/bench_motion.py "$BUILD/lsmorph" "$TMP/bunny8" "$BUILD"/bench-band/512/*/kept
 
