@@ -519,6 +519,29 @@ for kind in tiff8 tiff1 tiff16 mixed; do
   [ $kind = tiff16 ] && check "16-bit 0/1 label TIFFs: the note on label masks" grep -q "(label masks stored as 0/1)" "$TMP/e"
 done
 
+# --motion auto (the default): a thin ellipse turning 40 degrees per slice is tried pair by
+# pair (run.json pairs[].motion: left_out, field) and the run says so; --motion none does not
+/usr/bin/python3 - "$TMP/turning" <<'PY'
+import os, sys
+import numpy as np
+from PIL import Image
+os.makedirs(sys.argv[1], exist_ok=True)
+y, x = np.mgrid[0:64, 0:96] - np.array([32, 48])[:, None, None]
+for k in range(5):
+    t = np.radians(40 * k)
+    u, v = x * np.cos(t) + y * np.sin(t), -x * np.sin(t) + y * np.cos(t)
+    Image.fromarray(((u / 16) ** 2 + (v / 3) ** 2 <= 1).astype(np.uint8) * 255).save(
+        os.path.join(sys.argv[1], "%d.png" % k))
+PY
+"$LSM" reconstruct "$TMP/turning" -o "$TMP/out-turning" --spacing 8 --no-preview >"$TMP/o" 2>"$TMP/e"
+check "turning ellipse: the auto note ($(grep auto "$TMP/e"))" grep -q "note: --motion auto tried 4 of 4 pairs" "$TMP/e"
+check "turning ellipse: run.json has each pair's left_out" [ "$(json_count "$TMP/out-turning/run.json" left_out)" -eq 4 ]
+check "turning ellipse: the pairs follow the field" grep -q '"field": true' "$TMP/out-turning/run.json"
+"$LSM" reconstruct "$TMP/turning" -o "$TMP/out-turning-none" --spacing 8 --no-preview --motion none \
+  >"$TMP/o" 2>"$TMP/e"
+check "--motion none: no auto note" sh -c "! grep -q 'motion auto' '$TMP/e'"
+check "--motion none: no motion in run.json's pairs" [ "$(json_count "$TMP/out-turning-none/run.json" left_out)" -eq 0 ]
+
 # The same command into an existing OUT replaces it.
 "$LSM" reconstruct "$SET" -o "$OUT" --input outline --heights "$SET/heights.txt" --dz 40 -q \
   >"$TMP/o" 2>"$TMP/e"

@@ -180,6 +180,16 @@ static void report_result(const lsm_cli *cli, const lsm_slice_files *src, const 
   if (capped)
     fprintf(stderr, "lsmorph: note: %d gaps stopped at --max-iter %d before finishing\n", capped,
             cli->stack.max_iter);
+  int tried = 0, took = 0;
+  for (size_t k = 0; k + 1 < src->count; ++k) {
+    tried += stats[k].motion_tests > 0;
+    took += stats[k].motion_field;
+  }
+  if (cli->stack.motion == LSM_MOTION_AUTO && tried)
+    fprintf(stderr,
+            "lsmorph: note: --motion auto tried %d of %zu pairs by leaving their slices out; "
+            "%d follow the correspondence field (run.json: pairs[].motion)\n",
+            tried, src->count - 1, took);
   if (!lsm_outputs_evenly_spaced(out))
     fprintf(stderr,
             "lsmorph: note: the output slices are not evenly spaced (steps %.4g to %.4g); "
