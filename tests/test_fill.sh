@@ -36,6 +36,7 @@ for f in drawn.nii.gz drawn2.nii drawn.nrrd drawn.seg.nrrd drawn.nhdr; do
   run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" verify "$TMP" "$f" "$out"
 done
 check "the note lists the drawn slices" grep -q "taken as drawn: the 9 slices holding labels (4, 8, ..., 36 (every 4th)), and 0 and 40" "$TMP/e"
+check "the note on the gaps --motion auto tried (the oblique tube moves)" grep -q "note: --motion auto tried [0-9]* gaps of the labels by leaving their drawn slices out; [0-9]* follow" "$TMP/e"
 check "no temporary file left" [ -z "$(ls -A "$TMP" | grep '\.tmp-')" ]
 # NIfTI in, NRRD out and back: the geometry converted
 fill drawn.nii.gz cross.seg.nrrd

@@ -524,6 +524,12 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
             plan->gap_slices, axis_names[plan->axis], stats.voxels_filled, stats.runs,
             stats.runs == 1 ? "" : "s", stats.threads, a->out_path, t_end - t0, t_read - t0,
             t_filled - t_read, stats.solver_seconds, stats.iterations, t_end - t_filled);
+  if (st == LSM_OK && !quiet && stats.motion_tried)
+    fprintf(stderr,
+            "lsmorph: note: --motion auto tried %lld gap%s of the labels by leaving their drawn "
+            "slices out; %lld follow%s the correspondence field\n",
+            stats.motion_tried, stats.motion_tried == 1 ? "" : "s", stats.motion_field,
+            stats.motion_field == 1 ? "s" : "");
   lsm_backend_close(&backend);
   lsm_fill_plan_free(&plan);
   free(slices);

@@ -204,9 +204,15 @@ static lsm_status task_box(label_task *t, lsm_err *err) {
   return LSM_OK;
 }
 
+/* What one label's run adds to the fill's statistics. */
+typedef struct task_counts {
+  long long iterations, motion_tried, motion_field;
+  double solver_seconds;
+} task_counts;
+
 /* One label's stack run, on `threads` threads. */
-static lsm_status run_task(label_task *t, const lsm_fill_opts *o, int threads, long long *iterations,
-                           double *solver_seconds, lsm_err *err) {
+static lsm_status run_task(label_task *t, const lsm_fill_opts *o, int threads, task_counts *n,
+                           lsm_err *err) {
   fill_shared *sh = t->sh;
   const fill_geometry *g = &sh->in->geo;
   LSM_TRY(task_box(t, err));
@@ -225,8 +231,10 @@ static lsm_status run_task(label_task *t, const lsm_fill_opts *o, int threads, l
   const lsm_slice_sink sink = {t, task_emit};
   const lsm_status st = lsm_stack_run(&source, t->width, t->height, &so, &sink, stats, NULL, err);
   for (size_t k = 0; st == LSM_OK && k + 1 < t->count; ++k) {
-    *iterations += stats[k].iterations;
-    *solver_seconds += stats[k].seconds;
+    n->iterations += stats[k].iterations;
+    n->solver_seconds += stats[k].seconds;
+    n->motion_tried += stats[k].motion_tests > 0;
+    n->motion_field += stats[k].motion_field;
   }
   free(stats);
   return st;
@@ -322,20 +330,21 @@ lsm_status lsm_fill_run(const lsm_fill_plan *plan, lsm_voxels *v, const lsm_fill
   lsm_status first_status = st;
   lsm_err first_err;
   lsm_err_clear(&first_err);
-  long long iterations = 0;
+  long long iterations = 0, motion_tried = 0, motion_field = 0;
   double solver_seconds = 0.0;
   if (st == LSM_OK) {
 #pragma omp parallel for num_threads(side_by_side ? threads : 1) schedule(dynamic, 1) \
-    reduction(+ : iterations, solver_seconds)
+    reduction(+ : iterations, solver_seconds, motion_tried, motion_field)
     for (size_t k = 0; k < tasks; ++k) {
       if (failed(&sh)) continue;
       lsm_err e;
       lsm_err_clear(&e);
-      long long its = 0;
-      double secs = 0.0;
-      const lsm_status ts = run_task(&task[k], o, side_by_side ? 1 : threads, &its, &secs, &e);
-      iterations += its;
-      solver_seconds += secs;
+      task_counts n = {0, 0, 0, 0.0};
+      const lsm_status ts = run_task(&task[k], o, side_by_side ? 1 : threads, &n, &e);
+      iterations += n.iterations;
+      solver_seconds += n.solver_seconds;
+      motion_tried += n.motion_tried;
+      motion_field += n.motion_field;
       if (ts != LSM_OK) {
 #pragma omp critical(lsm_fill_error)
         {
@@ -363,6 +372,8 @@ lsm_status lsm_fill_run(const lsm_fill_plan *plan, lsm_voxels *v, const lsm_fill
     stats->runs = tasks;
     stats->iterations = iterations;
     stats->solver_seconds = solver_seconds;
+    stats->motion_tried = motion_tried;
+    stats->motion_field = motion_field;
     for (size_t k = 0; k < cells; ++k) stats->voxels_filled += sh.depth[k] != 0;
     for (size_t k = 0; k < tasks; ++k) {
       const size_t box = (size_t)task[k].width * (size_t)task[k].height;

@@ -104,6 +104,8 @@ typedef struct lsm_fill_stats {
   double solver_seconds;  /* the morphs' time, summed over the gaps (thread time) */
   double seconds;         /* wall clock of the runs */
   size_t box_cells_max;   /* the largest box, in cells of a slice */
+  long long motion_tried; /* --motion auto: gaps tried by leaving their slices out, all runs */
+  long long motion_field; /* gaps that followed the correspondence field, all runs */
   int threads;
 } lsm_fill_stats;
 
