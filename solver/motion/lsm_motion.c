@@ -233,6 +233,19 @@ lsm_status lsm_motion_field_zero(const lsm_grid *phi, int step, lsm_motion_field
   return field_alloc(phi->nx, phi->ny, step < 1 ? 1 : step, out, err);
 }
 
+lsm_status lsm_motion_field_clone(const lsm_motion_field *f, lsm_motion_field **out,
+                                  lsm_err *err) {
+  LSM_TRY(field_alloc(f->cnx, f->cny, f->step, out, err));
+  lsm_motion_field *c = *out;
+  const size_t n = (size_t)f->nx * (size_t)f->ny;
+  memcpy(c->vx, f->vx, n * sizeof(float));
+  memcpy(c->vy, f->vy, n * sizeof(float));
+  c->iterations = f->iterations;
+  c->seconds = f->seconds;
+  c->max_displacement = f->max_displacement;
+  return LSM_OK;
+}
+
 lsm_status lsm_motion_register(const lsm_grid *phi_a, const lsm_grid *phi_b,
                                const lsm_motion_params *p, int threads, lsm_motion_field **out,
                                lsm_err *err) {

@@ -96,6 +96,9 @@ int lsm_motion_level_stops(const lsm_motion_level *lv, double *history, int it, 
 /* A zero field over the canvas of phi (the identity maps). */
 lsm_status lsm_motion_field_zero(const lsm_grid *phi, int step, lsm_motion_field **out,
                                  lsm_err *err);
+/* A copy of f. */
+lsm_status lsm_motion_field_clone(const lsm_motion_field *f, lsm_motion_field **out,
+                                  lsm_err *err);
 void lsm_motion_field_destroy(lsm_motion_field **f);
 
 /* A map x -> x + d(x) on a field's node grid (d in node units). */

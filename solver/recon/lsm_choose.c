@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "solver/recon/lsm_flows.h"
 #include "solver/recon/lsm_slice.h"
 
 /* The input slices of src without the left-out one: the up to four nearest. */
@@ -67,11 +68,13 @@ static double window_dz(const lsm_slice_source *src, size_t j, const sub_source 
 /* Slice j of src left out and predicted with `motion`: the pixels missed. */
 static lsm_status predict(const lsm_slice_source *src, size_t j, const lsm_mask *truth, int width,
                           int height, const lsm_stack_opts *o, lsm_motion_mode motion,
-                          int threads, long long *missed, lsm_err *err) {
+                          int threads, lsm_flows *run, long long *missed, lsm_err *err) {
   sub_source sub = window(src, j);
   const lsm_slice_source source = {&sub, sub.count, sub.z, sub_load, sub_name};
+  const lsm_flows_lender lender = {run, sub.index, sub.count};
   lsm_stack_opts so = *o;
   so.motion = motion;
+  so.lender = run ? &lender : NULL;
   so.dz = window_dz(src, j, &sub);
   so.transport = NULL;
   so.morph.threads = threads;
@@ -96,16 +99,17 @@ int lsm_choose_can_leave_out(const lsm_slice_source *src, size_t j, const lsm_st
 }
 
 lsm_status lsm_choose_left_out(const lsm_slice_source *src, size_t j, int width, int height,
-                               const lsm_stack_opts *o, int threads, long long *missed_field,
-                               long long *missed_in_place, lsm_err *err) {
+                               const lsm_stack_opts *o, int threads, lsm_flows *run,
+                               long long *missed_field, long long *missed_in_place,
+                               lsm_err *err) {
   if (!lsm_choose_can_leave_out(src, j, o))
     return lsm_fail(err, LSM_ERR_INTERNAL, NULL, "leave-one-out: slice %zu has no two sides", j);
   lsm_slice left_out;
   LSM_TRY(lsm_slice_load(src, j, width, height, o->input, &left_out, err));
   lsm_status st = predict(src, j, &left_out.filled, width, height, o, LSM_MOTION_FIELD, threads,
-                          missed_field, err);
+                          run, missed_field, err);
   if (st == LSM_OK)
-    st = predict(src, j, &left_out.filled, width, height, o, LSM_MOTION_NONE, threads,
+    st = predict(src, j, &left_out.filled, width, height, o, LSM_MOTION_NONE, threads, NULL,
                  missed_in_place, err);
   lsm_slice_free(&left_out);
   return st;

@@ -28,12 +28,16 @@ typedef struct lsm_choice {
  * it writes no more output slices than the run (options o) does over the same heights. */
 int lsm_choose_can_leave_out(const lsm_slice_source *src, size_t j, const lsm_stack_opts *o);
 
+struct lsm_flows;
+
 /* Slice j of src (width x height slices) left out and predicted from the up to four
  * nearest others with --motion field and with --motion none: the pixels each prediction
- * got wrong.  o: the run's options (their motion is ignored); threads for each run. */
+ * got wrong.  o: the run's options (their motion is ignored); threads for each run; run:
+ * the run's fields (lsm_flows), which the predictions borrow for the pairs they share. */
 lsm_status lsm_choose_left_out(const lsm_slice_source *src, size_t j, int width, int height,
-                               const lsm_stack_opts *o, int threads, long long *missed_field,
-                               long long *missed_in_place, lsm_err *err);
+                               const lsm_stack_opts *o, int threads, struct lsm_flows *run,
+                               long long *missed_field, long long *missed_in_place,
+                               lsm_err *err);
 
 /* The choice from the tests of a pair's end slices, added up in *c (field set here): the
  * field when it predicted every slice left out better. */

@@ -19,10 +19,21 @@
 
 typedef struct lsm_flows lsm_flows;
 
+/* --motion auto's predictions (lsm_choose) are runs of their own on some of the run's slices:
+ * slice k of a prediction is the run's slice index[k], and a pair of it that is a pair of the
+ * run (index[k + 1] == index[k] + 1) borrows a copy of the run's field, computing it there
+ * when the run will still read it. */
+typedef struct lsm_flows_lender {
+  lsm_flows *flows;
+  const size_t *index;
+  size_t count;
+} lsm_flows_lender;
+
 /* The cache of the stack src (its count - 1 pairs), whose gaps g with g % size == rank run
- * here.  src is kept for --motion auto's choices (lsm_choose). */
-lsm_status lsm_flows_create(const lsm_slice_source *src, int rank, int size, lsm_flows **out,
-                            lsm_err *err);
+ * here.  src is kept for --motion auto's choices (lsm_choose); lender: NULL, or the run a
+ * prediction borrows fields from. */
+lsm_status lsm_flows_create(const lsm_slice_source *src, int rank, int size,
+                            const lsm_flows_lender *lender, lsm_flows **out, lsm_err *err);
 void lsm_flows_destroy(lsm_flows **flows);
 
 /* The margin of the canvas the fields are computed on (an unaligned gap's). */
