@@ -24,6 +24,10 @@ BUILD   ?= build-mpi
 CC      := mpicc
 endif
 BUILD   ?= build
+# one spelling per folder: a BUILD given as an absolute path inside the tree (the test
+# scripts pass one to `make install`) is made relative, so that the objects' dependency files
+# name the targets the way every other make does (else a header change was missed after it)
+override BUILD := $(patsubst $(CURDIR)/%,%,$(BUILD))
 PREFIX  ?= /usr/local
 
 WARN    := -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes
