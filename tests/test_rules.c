@@ -52,6 +52,15 @@ static void test_switch_off(void **state) {
     assert_int_equal(lsm_rules_switch_off(&rules, bad[k], &err), LSM_ERR_USAGE);
     assert_non_null(strstr(err.msg, "is not a rule"));
   }
+  /* a removed rule's name is taken and switches nothing off */
+  lsm_rules_default(&rules);
+  assert_int_equal(lsm_rules_switch_off(&rules, "parts-iou,parts-clear,align-best-shift", &err), LSM_OK);
+  assert_int_equal(rules.off, 0);
+  assert_int_equal(lsm_rules_switch_off(&rules, "align-in-place,omega", &err), LSM_OK);
+  for (int r = 0; r < LSM_RULE_COUNT; ++r)
+    assert_int_equal(lsm_rule_on(&rules, (lsm_rule)r), r != LSM_RULE_OMEGA);
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_rules_switch_off(&rules, "parts-io", &err), LSM_ERR_USAGE);
   lsm_err_clear(&err);
   lsm_rules_switch_off(&rules, "omega,no-such-rule", &err);
   assert_non_null(strstr(err.msg, "'no-such-rule'"));
@@ -64,8 +73,8 @@ static void test_defaults(void **state) {
   const lsm_rules *d = lsm_rules_defaults();
   assert_int_equal(d->off, 0);
   assert_true(lsm_rule_on(NULL, LSM_RULE_OMEGA));
-  assert_close(d->align_in_place_iou, 0.5, 0.0);
-  assert_close(d->parts_iou, 1.0 / 3.0, 0.0);
+  assert_close(d->align_alike_iou, 0.5, 0.0);
+  assert_close(d->parts_area_ratio, 2.0, 0.0);
   assert_close(d->pinhole_fill_cells, 4.0, 0.0);
   assert_close(d->end_share_flat + d->end_share_ramp, 0.6, 1e-15);
   assert_close(d->end_floor, 0.1, 0.0);
@@ -89,7 +98,8 @@ static void test_print(void **state) {
     if (!strstr(text, line)) fail_msg("rule %s is not listed", lsm_rule_name((lsm_rule)r));
   }
   assert_non_null(strstr(text, "  end_floor = 0.1 "));
-  assert_non_null(strstr(text, "  parts_iou = 0.3333 "));
+  assert_non_null(strstr(text, "  parts_area_ratio = 2 "));
+  assert_non_null(strstr(text, "\n  align-in-place, align-best-shift, parts-clear, parts-iou\n"));
   free(text);
 }
 

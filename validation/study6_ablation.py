@@ -43,7 +43,7 @@ def rule_names(lsmorph):
     out, _ = vlib.run([lsmorph, "help", "rules"])
     names = []
     for line in out.splitlines():
-        if line.startswith("constants"):
+        if line.startswith(("constants", "removed")):
             break
         if line and line[0].islower() and " " not in line and line.replace("-", "").isalpha():
             names.append(line)

@@ -14,14 +14,15 @@
 int lsm_pixel_shift(double offset) { return (int)floor(offset + 0.5); }
 
 /* --align auto: hull alignment for the pair a, b only when its shape moved
- * rather than changed (rules align-*).  A centroid moves too where a part
- * grows out on one side or shrinks away; then the best translation stays near
- * zero.  A small section inside a large one fits it at many shifts, and a
- * small part ending while a large one begins elsewhere fits inside it: in
- * neither does the best shift say the shape moved. */
+ * rather than changed (rules align-*): the centroid shift must make the two
+ * overlap more than in place, and the translation of largest overlap must
+ * make them alike, or somewhat alike where they barely touch in place.  A
+ * centroid moves too where a part grows out on one side; a small section
+ * inside a large one fits it at many shifts: in neither does the shift
+ * explain the difference. */
 static lsm_status resolve_align(lsm_align asked, const lsm_slice *a, const lsm_slice *b, int width,
-                                int height, double pixel_dx, double pixel_dy,
-                                const lsm_rules *rules, lsm_align *align, lsm_err *err) {
+                                int height, const lsm_rules *rules, lsm_align *align,
+                                lsm_err *err) {
   *align = asked;
   if (asked != LSM_ALIGN_AUTO) return LSM_OK;
   *align = LSM_ALIGN_NONE;
@@ -33,19 +34,12 @@ static lsm_status resolve_align(lsm_align asked, const lsm_slice *a, const lsm_s
   const size_t in_place = lsm_mask_overlap(&a->filled, &b->filled, 0, 0);
   const size_t area_a = lsm_mask_count(&a->filled), area_b = lsm_mask_count(&b->filled);
   const size_t area = area_a + area_b;
-  const double iou = (double)in_place / (double)(area - in_place);
-  if (lsm_rule_on(rules, LSM_RULE_ALIGN_IN_PLACE) && iou >= rules->align_in_place_iou)
-    return LSM_OK;
   if (lsm_rule_on(rules, LSM_RULE_ALIGN_CENTROID_GAIN) &&
       lsm_mask_overlap(&a->filled, &b->filled, dx, dy) <= in_place)
     return LSM_OK;
   int tx, ty;
   LSM_TRY(lsm_register_shift(&a->filled, &b->filled, &tx, &ty, err));
-  /* (physical lengths: a pixel need not be square) */
-  const double wx = pixel_dx * pixel_dx, wy = pixel_dy * pixel_dy;
-  const double to_centroid = wx * (tx - dx) * (tx - dx) + wy * (ty - dy) * (ty - dy);
-  if (lsm_rule_on(rules, LSM_RULE_ALIGN_BEST_SHIFT) && to_centroid >= wx * tx * tx + wy * ty * ty)
-    return LSM_OK;
+  const double iou = (double)in_place / (double)(area - in_place);
   const size_t smaller = area_a < area_b ? area_a : area_b;
   const size_t moved = lsm_mask_overlap(&a->filled, &b->filled, tx, ty);
   const double iou_moved = (double)moved / (double)(area - moved);
@@ -65,8 +59,7 @@ lsm_status lsm_frame_setup(lsm_frame *f, const lsm_window *w, lsm_align asked, l
   memset(f, 0, sizeof *f);
   if (!rules) rules = lsm_rules_defaults();
   lsm_align align, end_align = LSM_ALIGN_NONE;
-  LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, pixel_dx, pixel_dy, rules, &align,
-                        err));
+  LSM_TRY(resolve_align(asked, w->s[1], w->s[2], width, height, rules, &align, err));
   f->width = width;
   f->height = height;
   f->aligned = align == LSM_ALIGN_HULL;
@@ -90,8 +83,7 @@ lsm_status lsm_frame_setup(lsm_frame *f, const lsm_window *w, lsm_align asked, l
   const int ke = a->empty ? 1 : 2, kf = 3 - ke, kn = a->empty ? 3 : 0;
   if (interp == LSM_INTERP_CUBIC && a->empty != b->empty && asked != LSM_ALIGN_NONE &&
       lsm_window_usable(w, kn) && lsm_rule_on(rules, LSM_RULE_END_MOVES_ON))
-    LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, pixel_dx, pixel_dy, rules,
-                          &end_align, err));
+    LSM_TRY(resolve_align(asked, w->s[kn], w->s[kf], width, height, rules, &end_align, err));
   f->end_aligned = end_align == LSM_ALIGN_HULL;
   if (end_align == LSM_ALIGN_HULL) {
     const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);

@@ -48,39 +48,21 @@ static void label_parts(const lsm_mask *m, const lsm_mask *other, int32_t *label
   }
 }
 
-/* The part of `to` nearest to point (x, y), with the distance to it and to
- * the next nearest (INFINITY when there is none). */
-static int nearest(const part *to, int n, double x, double y, double *d1, double *d2) {
-  int best = -1;
-  *d1 = *d2 = INFINITY;
+/* The part of `to` nearest to point (x, y), with the distance to it; -1 when
+ * two are nearest alike (which part went where is then not told, and the
+ * pairing must not depend on the order the parts were labelled in). */
+static int nearest(const part *to, int n, double x, double y, double *distance) {
+  int best = -1, tie = 0;
+  *distance = INFINITY;
   for (int k = 0; k < n; ++k) {
     const double d = hypot(to[k].cx - x, to[k].cy - y);
-    if (d < *d1) {
-      *d2 = *d1;
-      *d1 = d;
+    tie = d == *distance ? 1 : d < *distance ? 0 : tie;
+    if (d < *distance) {
+      *distance = d;
       best = k;
-    } else if (d < *d2) {
-      *d2 = d;
     }
   }
-  return best;
-}
-
-/* Pixels of part ia (labels la) that land on part ib (labels lb) once moved
- * by (dx, dy). */
-static size_t part_overlap(const int32_t *la, const int32_t *lb, int w, int h, int ia, int ib,
-                           int dx, int dy) {
-  size_t count = 0;
-  for (int y = 0; y < h; ++y) {
-    const int yb = y + dy;
-    if (yb < 0 || yb >= h) continue;
-    for (int x = 0; x < w; ++x) {
-      const int xb = x + dx;
-      if (xb < 0 || xb >= w || la[(size_t)y * w + x] != ia) continue;
-      count += lb[(size_t)yb * w + xb] == ib;
-    }
-  }
-  return count;
+  return tie ? -1 : best;
 }
 
 static lsm_status part_mask(const int32_t *label, int w, int h, int id, lsm_mask *out,
@@ -100,7 +82,6 @@ lsm_status lsm_parts_moved(const lsm_mask *a, const lsm_mask *b, const lsm_rules
                            lsm_part_move *moves, int *count, lsm_err *err) {
   *count = 0;
   if (!rules) rules = lsm_rules_defaults();
-  const int clear = lsm_rule_on(rules, LSM_RULE_PARTS_CLEAR);
   const int w = a->width, h = a->height;
   const size_t cells = (size_t)w * (size_t)h;
   int32_t *la = lsm_alloc(cells, sizeof *la, err, "part labels");
@@ -124,19 +105,13 @@ lsm_status lsm_parts_moved(const lsm_mask *a, const lsm_mask *b, const lsm_rules
   int pairs = 0;
   for (int i = 0; i < na && nb > 0; ++i) {
     if (!pa[i].free) continue;
-    double d1, d2, e1, e2;
-    const int j = nearest(pb, nb, pa[i].cx, pa[i].cy, &d1, &d2);
-    if (!pb[j].free || (clear && d2 < rules->parts_clear * d1)) continue;
-    if (nearest(pa, na, pb[j].cx, pb[j].cy, &e1, &e2) != i || (clear && e2 < rules->parts_clear * e1))
-      continue;
+    double d1, e1;
+    const int j = nearest(pb, nb, pa[i].cx, pa[i].cy, &d1);
+    if (j < 0 || !pb[j].free || nearest(pa, na, pb[j].cx, pb[j].cy, &e1) != i) continue;
     const double ratio = (double)pa[i].area / (double)pb[j].area;
     if (lsm_rule_on(rules, LSM_RULE_PARTS_AREA) &&
         (ratio > rules->parts_area_ratio || ratio < 1.0 / rules->parts_area_ratio))
       continue;
-    const int dx = (int)lround(pb[j].cx - pa[i].cx), dy = (int)lround(pb[j].cy - pa[i].cy);
-    const size_t inter = part_overlap(la, lb, w, h, i, j, dx, dy);
-    const double iou = (double)inter / (double)(pa[i].area + pb[j].area - inter);
-    if (lsm_rule_on(rules, LSM_RULE_PARTS_IOU) && iou < rules->parts_iou) continue;
     pair_a[pairs] = i;
     pair_b[pairs] = j;
     dist[pairs] = d1;

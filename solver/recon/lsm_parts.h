@@ -13,12 +13,9 @@
  * all of these hold, so that nothing ambiguous moves:
  *   - neither overlaps any foreground of the other slice in place, and
  *     neither touches the image border;
- *   - each is the other's nearest component (centre to centre), and the next
- *     nearest is at least parts_clear times farther, on both sides (rule
- *     parts-clear);
- *   - their areas are within a factor parts_area_ratio (rule parts-area), and
- *     once A's part is moved by the shift between their centres the two
- *     overlap at IoU >= parts_iou (rule parts-iou).
+ *   - each is the other's nearest component (centre to centre), and no other
+ *     is as near (a tie does not tell which went where);
+ *   - their areas are within a factor parts_area_ratio (rule parts-area).
  */
 #ifndef LSM_PARTS_H
 #define LSM_PARTS_H

@@ -13,6 +13,13 @@ typedef struct rule_text {
 static const rule_text rule_texts[LSM_RULE_COUNT] = {LSM_RULE_LIST(LSM_RULE_TEXT)};
 #undef LSM_RULE_TEXT
 
+/* Rules removed after the ablation (validation/measurements/ablation.md,
+ * session 5): what switching them off fell back to is how lsmorph works now,
+ * so --rules-off still takes their names and has nothing left to do. */
+static const char *const removed_rules[] = {"align-in-place", "align-best-shift", "parts-clear",
+                                            "parts-iou"};
+#define REMOVED_RULES (sizeof removed_rules / sizeof removed_rules[0])
+
 static const lsm_rules defaults = {
     0,
 #define LSM_CONSTANT_VALUE(field, value, what) value,
@@ -39,6 +46,8 @@ lsm_status lsm_rules_switch_off(lsm_rules *rules, const char *names, lsm_err *er
         rules->off |= (uint64_t)1 << r;
         found = 1;
       }
+    for (size_t r = 0; r < REMOVED_RULES && !found; ++r)
+      found = strlen(removed_rules[r]) == len && strncmp(removed_rules[r], p, len) == 0;
     if (!found)
       return lsm_fail(err, LSM_ERR_USAGE, NULL,
                       "--rules-off: '%.*s' is not a rule (see 'lsmorph help rules')",
@@ -75,6 +84,13 @@ void lsm_rules_print(FILE *f) {
     print_wrapped(f, "  why:", 8, rule_texts[r].why);
     print_wrapped(f, "  off:", 8, rule_texts[r].off);
   }
+  fputs("\nremoved (--rules-off still takes the names; they are always off now)\n", f);
+  char names[256] = "";
+  for (size_t r = 0; r < REMOVED_RULES; ++r) {
+    const size_t n = strlen(names);
+    snprintf(names + n, sizeof names - n, "%s%s", r ? ", " : "", removed_rules[r]);
+  }
+  print_wrapped(f, "", 2, names);
   fputs("\nconstants (defaults)\n", f);
   char label[64];
 #define LSM_CONSTANT_PRINT(field, value, what)                     \

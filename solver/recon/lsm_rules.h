@@ -27,18 +27,9 @@
     "a morph in place shrinks a moved shape and grows it again beside; aligning every pair "      \
     "shifts shapes that only changed",                                                            \
     "no pair is aligned, as with --align none")                                                   \
-  X(ALIGN_IN_PLACE, "align-in-place",                                                             \
-    "auto: a pair overlapping with IoU >= align_in_place_iou in place is not aligned",            \
-    "shapes that overlap that much are morphed well in place",                                    \
-    "the in-place overlap is not tested")                                                         \
   X(ALIGN_CENTROID_GAIN, "align-centroid-gain",                                                   \
     "auto: aligned only if the centroid shift makes the two overlap more than in place",          \
     "a centroid that moves while the overlap does not is a change of shape",                      \
-    "not tested")                                                                                 \
-  X(ALIGN_BEST_SHIFT, "align-best-shift",                                                         \
-    "auto: aligned only if the translation of largest overlap (lsm_register) lies nearer the "    \
-    "centroid shift than no shift",                                                               \
-    "a part growing out on one side moves the centroid, not the best shift",                      \
     "not tested")                                                                                 \
   X(ALIGN_APART, "align-apart",                                                                   \
     "auto: a pair that barely touches in place (overlap < align_apart_overlap of the smaller) "   \
@@ -68,23 +59,16 @@
     "a background margin")                                                                        \
   /* moving parts (lsm_parts, lsm_gap) */                                                         \
   X(MOVING_PARTS, "moving-parts",                                                                 \
-    "ls/pls, mask input, unaligned pairs: parts paired across the gap that moved off their "      \
-    "place travel on their own, as the blend of the two moved to the same place",                 \
+    "ls/pls, mask input, unaligned pairs: parts paired across the gap (each the other's "         \
+    "nearest) that moved off their place travel on their own, as the blend of the two moved to "  \
+    "the same place",                                                                             \
     "parts drifting apart (vessels, ears, legs) leave the centroid in place; in place they "      \
     "shrink away and grow again beside",                                                          \
     "every part is morphed in place")                                                             \
-  X(PARTS_CLEAR, "parts-clear",                                                                   \
-    "a pair of parts is each other's nearest, and the next nearest is parts_clear times farther", \
-    "nothing ambiguous moves",                                                                    \
-    "mutual nearest is enough")                                                                   \
   X(PARTS_AREA, "parts-area",                                                                     \
     "a pair of parts has areas within a factor parts_area_ratio",                                 \
     "a part much larger or smaller is not the same part",                                         \
     "areas are not compared")                                                                     \
-  X(PARTS_IOU, "parts-iou",                                                                       \
-    "moved by the shift between their centres, a pair of parts overlaps at IoU >= parts_iou",     \
-    "the two are the same shape, moved",                                                          \
-    "shapes are not compared")                                                                    \
   X(FIELD_PARTS, "field-parts",                                                                   \
     "--motion field: two parts matched one to one in place and under the field take it when "     \
     "they do not overlap or each reaches half the larger half-thickness outside the other; "      \
@@ -239,16 +223,13 @@ typedef enum lsm_rule { LSM_RULE_LIST(LSM_RULE_ID) LSM_RULE_COUNT } lsm_rule;
 #undef LSM_RULE_ID
 
 #define LSM_CONSTANT_LIST(X)                                                                      \
-  X(align_in_place_iou, 0.5, "align-in-place: IoU in place from which a pair is not aligned")     \
   X(align_apart_overlap, 0.1, "align-apart: in-place overlap below this share of the smaller "    \
                               "section is barely touching")                                      \
   X(align_apart_iou, 0.25, "align-apart: IoU at the best shift from which the two are somewhat "  \
                            "alike")                                                               \
   X(align_alike_iou, 0.5, "align-alike: IoU at the best shift from which the two are alike")      \
   X(align_alike_gain, 1.5, "align-alike: and at least this many times the IoU in place")          \
-  X(parts_clear, 1.5, "parts-clear: how much farther the next nearest component must be")         \
   X(parts_area_ratio, 2.0, "parts-area: largest ratio of the two parts' areas")                   \
-  X(parts_iou, 1.0 / 3.0, "parts-iou: smallest IoU of the two parts moved together")              \
   X(parts_margin_px, 16.0, "moving-parts: margin of the window where a moving part's phi is "     \
                            "kept (its zero level is exact either way)")                           \
   X(unmatched_grow_px, 2.0, "unmatched: a component is its inside dilated by this, so its "       \
