@@ -91,6 +91,19 @@ check "memory past --max-memory: the message lacks the numbers: $(cat "$TMP/stde
   grep -q -F "of memory (1 gap at a time, working on 68x68 cells and holding up to" "$TMP/stderr"
 check "memory past --max-memory: the message lacks the way out: $(cat "$TMP/stderr")" \
   grep -q -F "more than --max-memory 1000000: lower --threads" "$TMP/stderr"
+# the correspondence field (--motion field, and auto, the default) adds to what a gap holds;
+# the blend never registers one
+estimate_bytes() {
+  "$LSM" reconstruct small -o out -q --spacing 40 --max-memory 1000 "$@" 2>&1 |
+    sed -n 's/.*needs about \([0-9.]*\) \([A-Za-z]*\) of memory.*/\1 \2/p' |
+    awk '{ m = $2 == "KiB" ? 1024 : $2 == "MiB" ? 1048576 : $2 == "GiB" ? 1073741824 : 1; print $1 * m }'
+}
+in_place=$(estimate_bytes --motion none) with_field=$(estimate_bytes) blend_field=$(estimate_bytes --method blend)
+check "the estimate: no numbers ($in_place, $with_field)" [ -n "$in_place" ] && [ -n "$with_field" ]
+check "the estimate does not count the field: $with_field bytes by default, $in_place with --motion none" \
+  awk "BEGIN { exit !($with_field > $in_place) }"
+check "the estimate counts a field for the blend: $blend_field bytes, $in_place in place" \
+  awk "BEGIN { exit !($blend_field == $in_place) }"
 mkdir -p full
 if unshare -rm sh -c 'mount -t tmpfs -o size=256k tmpfs full' 2>/dev/null; then
   unshare -rm sh -c "mount -t tmpfs -o size=256k tmpfs full && '$LSM' reconstruct long -o full/out --spacing 20" \

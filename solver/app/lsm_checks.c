@@ -163,6 +163,10 @@ lsm_status lsm_check_inputs(const lsm_cli *cli, const lsm_slice_files *src, cons
 #define LSM_MEM_GAP_PER_CELL 160.0
 #define LSM_MEM_PLS_PER_CELL 48.0
 #define LSM_MEM_MESH_PER_PIXEL 96.0
+/* --motion field and auto: the pair's registration and its field (the velocity, the
+ * exponentials both ways, the warped distances, the update and the smoothing's scratch, at
+ * full resolution and the coarser levels; measured 42 to 47 B a cell at 512^2 to 2048^2). */
+#define LSM_MEM_FIELD_PER_CELL 64.0
 #define LSM_MEM_WRITER_QUEUE (64.0 * 1048576.0)
 
 /* A number from the first line of path (0 when absent, or "max"). */
@@ -255,7 +259,8 @@ lsm_status lsm_check_resources(lsm_cli *cli, const lsm_slice_files *src, const d
   }
   const int workers = o->per_iteration ? 1 : lsm_schedule_gap_workers(o, w, h, src->count - 1, most);
   const double per_gap =
-      canvas * (LSM_MEM_GAP_PER_CELL + (o->method == LSM_METHOD_PLS ? LSM_MEM_PLS_PER_CELL : 0.0));
+      canvas * (LSM_MEM_GAP_PER_CELL + (o->method == LSM_METHOD_PLS ? LSM_MEM_PLS_PER_CELL : 0.0) +
+                (o->motion != LSM_MOTION_NONE ? LSM_MEM_FIELD_PER_CELL : 0.0));
   const double held = (double)most * (canvas + (workers > 1 ? pixels : 0.0)) * sizeof(float);
   const double output = (double)count * pixels * sizeof(float);
   const double queue = o->per_iteration || output > LSM_MEM_WRITER_QUEUE ? LSM_MEM_WRITER_QUEUE : output;
@@ -305,8 +310,9 @@ lsm_status lsm_check_fill_resources(uint64_t max_memory, const lsm_fill_need *ne
   /* the volume is held already; the fill adds the gap slices' label depths
    * (16-bit), and each thread one gap's working canvas and the slices it holds */
   const double canvas = ((double)need->width + 4.0) * ((double)need->height + 4.0);
-  const double memory = LSM_MEM_BASE + 2.0 * need->gap_voxels +
-                        need->threads * canvas * (LSM_MEM_GAP_PER_CELL + 4.0 * (double)need->most);
+  const double per_cell = LSM_MEM_GAP_PER_CELL + (need->field ? LSM_MEM_FIELD_PER_CELL : 0.0) +
+                          4.0 * (double)need->most;
+  const double memory = LSM_MEM_BASE + 2.0 * need->gap_voxels + need->threads * canvas * per_cell;
   const double available = max_memory ? (double)max_memory : lsm_memory_available();
   char a[32], b[64], c[32];
   if (max_memory)

@@ -39,6 +39,7 @@ typedef struct lsm_fill_need {
   size_t most;        /* slices of the longest gap */
   int threads;
   double out_bytes;   /* the output file, uncompressed (0: compressed, not known ahead) */
+  int field;          /* the correspondence field may be registered (--motion field, auto) */
 } lsm_fill_need;
 
 /* The same estimate for fill, before the work: memory against --max-memory

@@ -403,7 +403,10 @@ static lsm_status check_resources(const fill_args *a, lsm_label_file *f, const l
                                   int threads, const lsm_out_file *out, lsm_err *err) {
   const lsm_voxels *v = lsm_labels_voxels(f);
   const int u = plan->axis == 0 ? 1 : 0, w = plan->axis == 2 ? 1 : 2;
-  lsm_fill_need need = {0.0, (int)v->n[u], (int)v->n[w], 0, threads, 0.0};
+  lsm_stack_opts resolved = a->shared.stack;
+  lsm_stack_opts_resolve(&resolved);
+  lsm_fill_need need = {0.0, (int)v->n[u], (int)v->n[w], 0, threads, 0.0,
+                        resolved.motion != LSM_MOTION_NONE};
   need.gap_voxels = (double)plan->gap_slices * (double)v->n[u] * (double)v->n[w];
   for (size_t k = 0; k + 1 < plan->n_drawn; ++k)
     if (plan->drawn[k + 1] - plan->drawn[k] - 1 > need.most) need.most = plan->drawn[k + 1] - plan->drawn[k] - 1;
