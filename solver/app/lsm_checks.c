@@ -283,6 +283,9 @@ lsm_status lsm_check_resources(lsm_cli *cli, const lsm_slice_files *src, const d
                     most ? " and holding up to " : "", most ? bytes_text(held, c, sizeof c) : "", b);
   /* what one gap may hold for its turn (per iteration: known only then) */
   if (available > 0.0) cli->stack.held_max = (available - fixed) / workers;
+  /* and how large a canvas one gap may work on: an aligned pair pads its canvas by its shift
+   * (up to four times the cells), which only the gap knows */
+  if (available > 0.0) cli->stack.canvas_max = (available - memory) / (workers * per_gap / canvas) + canvas;
   if (o->per_iteration) return LSM_OK;
   /* disk: what is sure to be written, in the temporary folder's file system */
   char formats[128];
@@ -306,7 +309,8 @@ lsm_status lsm_check_resources(lsm_cli *cli, const lsm_slice_files *src, const d
 }
 
 lsm_status lsm_check_fill_resources(uint64_t max_memory, const lsm_fill_need *need,
-                                    const char *labels_path, const char *folder, lsm_err *err) {
+                                    const char *labels_path, const char *folder,
+                                    double *canvas_max, lsm_err *err) {
   /* the volume is held already; the fill adds the gap slices' label depths
    * (16-bit), and each thread one gap's working canvas and the slices it holds */
   const double canvas = ((double)need->width + 4.0) * ((double)need->height + 4.0);
@@ -314,6 +318,7 @@ lsm_status lsm_check_fill_resources(uint64_t max_memory, const lsm_fill_need *ne
                           4.0 * (double)need->most;
   const double memory = LSM_MEM_BASE + 2.0 * need->gap_voxels + need->threads * canvas * per_cell;
   const double available = max_memory ? (double)max_memory : lsm_memory_available();
+  *canvas_max = available > 0.0 ? (available - memory) / (need->threads * per_cell) + canvas : 0.0;
   char a[32], b[64], c[32];
   if (max_memory)
     snprintf(b, sizeof b, "--max-memory %llu", (unsigned long long)max_memory);

@@ -44,9 +44,11 @@ typedef struct lsm_fill_need {
 
 /* The same estimate for fill, before the work: memory against --max-memory
  * (max_memory, 0: what is available), the output against the free space of
- * folder (where it is written). */
+ * folder (where it is written).  *canvas_max: the most cells a gap's working
+ * canvas may have within that memory (0: no limit; lsm_stack_opts.canvas_max). */
 lsm_status lsm_check_fill_resources(uint64_t max_memory, const lsm_fill_need *need,
-                                    const char *labels_path, const char *folder, lsm_err *err);
+                                    const char *labels_path, const char *folder,
+                                    double *canvas_max, lsm_err *err);
 
 /* Bytes of memory this process may still take: MemAvailable, or less where
  * its cgroup allows less; 0 where the system does not say. */

@@ -400,7 +400,8 @@ static void fill_progress_update(void *ctx, size_t done, size_t total, size_t pa
 
 /* Memory and disk before the work (lsm_check_fill_resources). */
 static lsm_status check_resources(const fill_args *a, lsm_label_file *f, const lsm_fill_plan *plan,
-                                  int threads, const lsm_out_file *out, lsm_err *err) {
+                                  int threads, const lsm_out_file *out, double *canvas_max,
+                                  lsm_err *err) {
   const lsm_voxels *v = lsm_labels_voxels(f);
   const int u = plan->axis == 0 ? 1 : 0, w = plan->axis == 2 ? 1 : 2;
   lsm_stack_opts resolved = a->shared.stack;
@@ -415,7 +416,8 @@ static lsm_status check_resources(const fill_args *a, lsm_label_file *f, const l
   const int nifti = lsm_labels_format_of(out->path) == LSM_LABELS_NIFTI;
   if (!(nifti ? gz_name : lsm_labels_compressed(f)))
     need.out_bytes = (double)v->n[0] * (double)v->n[1] * (double)v->n[2] * (double)lsm_voxel_size(v->type);
-  return lsm_check_fill_resources(a->shared.max_memory, &need, a->labels_path, out->folder, err);
+  return lsm_check_fill_resources(a->shared.max_memory, &need, a->labels_path, out->folder,
+                                  canvas_max, err);
 }
 
 static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_err *err) {
@@ -495,7 +497,8 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
       fprintf(stderr, "lsmorph: note: %s has no effect without --method pls\n",
               a->shared.pls_option);
   }
-  if (st == LSM_OK && plan->gap_slices > 0) st = check_resources(a, f, plan, o.threads, &out, err);
+  if (st == LSM_OK && plan->gap_slices > 0)
+    st = check_resources(a, f, plan, o.threads, &out, &o.stack.canvas_max, err);
   lsm_backend *backend = NULL;
   if (st == LSM_OK && plan->gap_slices > 0) {
     omp_set_num_threads(o.threads);

@@ -182,6 +182,14 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
   LSM_TRY(lsm_frame_setup(&g->f, w, align, o->interp, width, height, o->pixel_dx,
                           o->pixel_dy, &o->rules, err));
   const int nx = width + 2 * g->f.pad, ny = height + 2 * g->f.pad_y;
+  if (o->canvas_max > 0.0 && (double)nx * (double)ny > o->canvas_max)
+    return lsm_fail(err, LSM_ERR_LIMIT, NULL,
+                    "the gap from height %g to %g: its shape moved by %d x %d px, and aligned it "
+                    "is worked on a canvas of %dx%d cells, more than the %.0f cells the memory "
+                    "left allows (--max-memory): --align none works in place, or allow more "
+                    "with --max-memory BYTES",
+                    w->z[1], w->z[2], g->f.dx[2] - g->f.dx[1], g->f.dy[2] - g->f.dy[1], nx, ny,
+                    o->canvas_max);
   const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
   lsm_status st = lsm_grid_create(nx, ny, hx, hy, &g->phi_a, err);
   if (st == LSM_OK) st = lsm_grid_create(nx, ny, hx, hy, &g->phi_b, err);

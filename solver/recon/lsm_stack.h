@@ -136,6 +136,8 @@ typedef struct lsm_stack_opts {
   lsm_rules rules;     /* the reconstruction rules switched on, and their constants */
   double held_max;     /* most bytes of slices one gap may hold for their turn (0: no limit;
                           per-iteration's count is known only then: the CLI's --max-memory) */
+  double canvas_max;   /* most cells of one gap's working canvas (0: no limit; an aligned pair
+                          widens it by its shift: the CLI's --max-memory) */
   const struct lsm_flows_lender *lender; /* internal (lsm_choose): the fields a prediction
                                             borrows from its run; NULL */
 } lsm_stack_opts;
