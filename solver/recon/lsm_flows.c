@@ -119,7 +119,7 @@ static lsm_status pair_parts(const lsm_slice *a, const lsm_slice *b, const lsm_s
  * tried on the stack's own slices (lsm_choose); the others stay in place untried. */
 static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
                          const lsm_stack_opts *o, int width, int height, int threads,
-                         flow_slot *slot, lsm_err *err) {
+                         flow_slot *slot, lsm_grid **keep_a, lsm_grid **keep_b, lsm_err *err) {
   if (slot->chosen) return LSM_OK;
   slot->choice = (lsm_choice){0};
   lsm_status st = LSM_OK;
@@ -129,6 +129,11 @@ static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
     int needs = 0;
     st = pair_parts(a, b, o, width, height, &pa, &pb, &parts, &needs, err);
     lsm_pairing_destroy(&parts);
+    if (st == LSM_OK && keep_a && keep_b) { /* the caller's gap may work on them */
+      *keep_a = pa;
+      *keep_b = pb;
+      pa = pb = NULL;
+    }
     lsm_grid_destroy(&pa);
     lsm_grid_destroy(&pb);
     /* until a slice the field predicts no better: the pair then stays in place */
@@ -158,12 +163,14 @@ static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
 
 lsm_status lsm_flows_choice(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
                             const lsm_stack_opts *o, int width, int height, int threads,
-                            lsm_choice *choice, lsm_err *err) {
+                            lsm_choice *choice, lsm_grid **phi_a, lsm_grid **phi_b,
+                            lsm_err *err) {
   flow_slot *slot = &flows->slots[pair];
   omp_set_lock(&slot->choice_lock);
-  const lsm_status st = o->motion == LSM_MOTION_AUTO
-                            ? choose(flows, pair, a, b, o, width, height, threads, slot, err)
-                            : LSM_OK;
+  const lsm_status st =
+      o->motion == LSM_MOTION_AUTO
+          ? choose(flows, pair, a, b, o, width, height, threads, slot, phi_a, phi_b, err)
+          : LSM_OK;
   *choice = slot->choice;
   omp_unset_lock(&slot->choice_lock);
   return st;

@@ -50,11 +50,14 @@ lsm_status lsm_flows_get(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
                          const lsm_motion_field **field, lsm_err *err);
 
 /* Whether pair `pair` (its slices a and b, loaded) takes the field: with --motion field
- * always; with --motion auto the leave-one-out choice, made on first use (by this call or
- * lsm_flows_get) and kept. */
+ * always; with --motion auto the leave-one-out choice, made on the first call and kept.
+ * When this call made it from the two slices' phi on the fields' canvas (LSM_FLOWS_PAD
+ * cells around the image, unshifted), it hands them over in *phi_a and *phi_b (the caller
+ * destroys them; NULL otherwise, and phi_a, phi_b may be NULL). */
 lsm_status lsm_flows_choice(lsm_flows *flows, size_t pair, const lsm_slice *a, const lsm_slice *b,
                             const lsm_stack_opts *o, int width, int height, int threads,
-                            lsm_choice *choice, lsm_err *err);
+                            lsm_choice *choice, lsm_grid **phi_a, lsm_grid **phi_b,
+                            lsm_err *err);
 
 /* Gap `gap` has finished (also on failure): fields nobody here will read again are freed. */
 void lsm_flows_gap_done(lsm_flows *flows, size_t gap);

@@ -176,26 +176,46 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
   const lsm_slice *a = w->s[1], *b = w->s[2];
   /* --motion field or auto: whether this pair takes the field (auto: lsm_choose); a pair
    * that does runs unaligned, one that does not as with --motion none */
+  lsm_grid *chosen_a = NULL, *chosen_b = NULL; /* the choice's phi, when it made them */
   if (flows && !a->empty && !b->empty && !o->per_iteration)
-    LSM_TRY(lsm_flows_choice(flows, w->gap, a, b, o, width, height, threads, &g->choice, err));
+    LSM_TRY(lsm_flows_choice(flows, w->gap, a, b, o, width, height, threads, &g->choice,
+                             &chosen_a, &chosen_b, err));
   const lsm_align align = g->choice.field && o->align == LSM_ALIGN_AUTO ? LSM_ALIGN_NONE : o->align;
-  LSM_TRY(lsm_frame_setup(&g->f, w, align, o->interp, width, height, o->pixel_dx,
-                          o->pixel_dy, &o->rules, err));
-  const int nx = width + 2 * g->f.pad, ny = height + 2 * g->f.pad_y;
-  if (o->canvas_max > 0.0 && (double)nx * (double)ny > o->canvas_max)
-    return lsm_fail(err, LSM_ERR_LIMIT, NULL,
+  lsm_status st = lsm_frame_setup(&g->f, w, align, o->interp, width, height, o->pixel_dx,
+                                  o->pixel_dy, &o->rules, err);
+  const lsm_frame *f = &g->f;
+  /* on the fields' canvas, unshifted, the gap's phi are the choice's */
+  if (st == LSM_OK && chosen_a && f->pad == LSM_FLOWS_PAD && f->pad_y == LSM_FLOWS_PAD &&
+      !f->dx[1] && !f->dy[1] && !f->dx[2] && !f->dy[2]) {
+    g->phi_a = chosen_a;
+    g->phi_b = chosen_b;
+    chosen_a = chosen_b = NULL;
+  }
+  lsm_grid_destroy(&chosen_a);
+  lsm_grid_destroy(&chosen_b);
+  if (st != LSM_OK) {
+    lsm_gap_free(g);
+    return st;
+  }
+  const int nx = width + 2 * f->pad, ny = height + 2 * f->pad_y;
+  if (o->canvas_max > 0.0 && (double)nx * (double)ny > o->canvas_max) {
+    st = lsm_fail(err, LSM_ERR_LIMIT, NULL,
                     "the gap from height %g to %g: its shape moved by %d x %d px, and aligned it "
                     "is worked on a canvas of %dx%d cells, more than the %.0f cells the memory "
                     "left allows (--max-memory): --align none works in place, or allow more "
                     "with --max-memory BYTES",
-                    w->z[1], w->z[2], g->f.dx[2] - g->f.dx[1], g->f.dy[2] - g->f.dy[1], nx, ny,
+                    w->z[1], w->z[2], f->dx[2] - f->dx[1], f->dy[2] - f->dy[1], nx, ny,
                     o->canvas_max);
+    lsm_gap_free(g);
+    return st;
+  }
   const float hx = (float)o->pixel_dx, hy = (float)o->pixel_dy;
-  lsm_status st = lsm_grid_create(nx, ny, hx, hy, &g->phi_a, err);
-  if (st == LSM_OK) st = lsm_grid_create(nx, ny, hx, hy, &g->phi_b, err);
-  const lsm_frame *f = &g->f;
-  if (st == LSM_OK) st = lsm_slice_phi(a, o, f->pad - f->dx[1], f->pad_y - f->dy[1], g->phi_a, err);
-  if (st == LSM_OK) st = lsm_slice_phi(b, o, f->pad - f->dx[2], f->pad_y - f->dy[2], g->phi_b, err);
+  if (!g->phi_a) {
+    st = lsm_grid_create(nx, ny, hx, hy, &g->phi_a, err);
+    if (st == LSM_OK) st = lsm_grid_create(nx, ny, hx, hy, &g->phi_b, err);
+    if (st == LSM_OK) st = lsm_slice_phi(a, o, f->pad - f->dx[1], f->pad_y - f->dy[1], g->phi_a, err);
+    if (st == LSM_OK) st = lsm_slice_phi(b, o, f->pad - f->dx[2], f->pad_y - f->dy[2], g->phi_b, err);
+  }
   if (st == LSM_OK && g->choice.field && f->pad == LSM_FLOWS_PAD && f->pad_y == LSM_FLOWS_PAD)
     st = gap_moving(o, width, height, w, flows, threads, g, err);
   if (st == LSM_OK && !g->moving && !a->empty && !b->empty && o->method != LSM_METHOD_BLEND &&
