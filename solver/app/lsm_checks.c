@@ -285,7 +285,8 @@ lsm_status lsm_check_resources(lsm_cli *cli, const lsm_slice_files *src, const d
   if (available > 0.0) cli->stack.held_max = (available - fixed) / workers;
   /* and how large a canvas one gap may work on: an aligned pair pads its canvas by its shift
    * (up to four times the cells), which only the gap knows */
-  if (available > 0.0) cli->stack.canvas_max = (available - memory) / (workers * per_gap / canvas) + canvas;
+  if (available > 0.0)
+    cli->stack.canvas_max = canvas + (available - memory) / (workers * per_gap / canvas);
   if (o->per_iteration) return LSM_OK;
   /* disk: what is sure to be written, in the temporary folder's file system */
   char formats[128];

@@ -213,8 +213,10 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
   if (!g->phi_a) {
     st = lsm_grid_create(nx, ny, hx, hy, &g->phi_a, err);
     if (st == LSM_OK) st = lsm_grid_create(nx, ny, hx, hy, &g->phi_b, err);
-    if (st == LSM_OK) st = lsm_slice_phi(a, o, f->pad - f->dx[1], f->pad_y - f->dy[1], g->phi_a, err);
-    if (st == LSM_OK) st = lsm_slice_phi(b, o, f->pad - f->dx[2], f->pad_y - f->dy[2], g->phi_b, err);
+    if (st == LSM_OK)
+      st = lsm_slice_phi(a, o, f->pad - f->dx[1], f->pad_y - f->dy[1], g->phi_a, err);
+    if (st == LSM_OK)
+      st = lsm_slice_phi(b, o, f->pad - f->dx[2], f->pad_y - f->dy[2], g->phi_b, err);
   }
   if (st == LSM_OK && g->choice.field && f->pad == LSM_FLOWS_PAD && f->pad_y == LSM_FLOWS_PAD)
     st = gap_moving(o, width, height, w, flows, threads, g, err);
