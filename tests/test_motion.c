@@ -317,6 +317,60 @@ static void test_auto_turning(void **state) {
   same_and_free(&autoc, &field);
 }
 
+/* The run's progress hears of each pair auto tries, once, before the pair writes anything:
+ * all four pairs of the turning ellipse; none with --motion none. */
+typedef struct tried_log {
+  int calls, seen[4];
+  size_t pairs;
+} tried_log;
+
+static void count_update(void *ctx, size_t done, size_t total, size_t pair, size_t pairs) {
+  (void)ctx, (void)done, (void)total, (void)pair, (void)pairs;
+}
+
+static void count_trying(void *ctx, size_t pair, size_t pairs) {
+  tried_log *t = ctx;
+#pragma omp critical(test_tried_log)
+  {
+    t->calls++;
+    if (pair < 4) t->seen[pair]++;
+    t->pairs = pairs;
+  }
+}
+
+static void test_auto_tells_progress(void **state) {
+  (void)state;
+  const double deg = 3.14159265358979323846 / 180.0;
+  disc d[5];
+  double z[5];
+  for (int k = 0; k < 5; ++k) {
+    d[k] = (disc){48, 32, 16, 3, 40 * k * deg};
+    z[k] = 8 * k;
+  }
+  for (int motion = 0; motion < 2; ++motion) {
+    tried_log t = {0, {0}, 0};
+    const lsm_progress progress = {&t, count_update, count_trying};
+    lsm_stack_opts o;
+    lsm_stack_opts_default(&o);
+    o.motion = motion ? LSM_MOTION_AUTO : LSM_MOTION_NONE;
+    o.morph.threads = 2;
+    stack_ctx c = {0};
+    c.d = d;
+    c.out = malloc(sizeof(float) * SW * SH * 64);
+    assert_non_null(c.out);
+    lsm_slice_source src = {&c, 5, z, src_load, NULL};
+    lsm_slice_sink sink = {&c, sink_emit};
+    lsm_pair_stats stats[4];
+    lsm_err err;
+    lsm_err_clear(&err);
+    assert_int_equal(lsm_stack_run(&src, SW, SH, &o, &sink, stats, &progress, &err), LSM_OK);
+    free(c.out);
+    assert_int_equal(t.calls, motion ? 4 : 0);
+    for (int p = 0; motion && p < 4; ++p) assert_int_equal(t.seen[p], 1);
+    if (motion) assert_int_equal(t.pairs, 4);
+  }
+}
+
 /* Where no part moved off itself (a disc growing in place) nothing is left out and the run
  * is --motion none's, float for float; a pair with no slice to leave out (a stack of two, a
  * disc jumping past its width) stays in place too. */
@@ -486,6 +540,7 @@ int main(void) {
       cmocka_unit_test(test_turning),
       cmocka_unit_test(test_default),
       cmocka_unit_test(test_auto_turning),
+      cmocka_unit_test(test_auto_tells_progress),
       cmocka_unit_test(test_auto_in_place),
       cmocka_unit_test(test_auto_uneven),
       cmocka_unit_test(test_pairing_needs),

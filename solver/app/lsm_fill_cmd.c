@@ -467,7 +467,7 @@ static lsm_status run_fill(fill_args *a, const volatile sig_atomic_t *stop, lsm_
   o.threads = a->threads > 0 ? a->threads : omp_get_num_procs();
   o.stack.morph.stop = stop;
   fill_progress fp = {isatty(fileno(stderr)), -1, t0};
-  lsm_progress progress = {&fp, fill_progress_update};
+  lsm_progress progress = {&fp, fill_progress_update, NULL};
   o.progress = quiet ? NULL : &progress;
   lsm_fill_plan *plan = NULL;
   if (st == LSM_OK) {

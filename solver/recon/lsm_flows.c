@@ -33,18 +33,21 @@ struct lsm_flows {
   int rank, size;
   const lsm_slice_source *src; /* the run's slices, for --motion auto's choice */
   const lsm_flows_lender *lender; /* a prediction's: the run it borrows fields from */
+  const lsm_progress *progress;   /* the run's, told when a pair is tried; NULL */
   flow_slot *slots;
   left_out_slot *left_out; /* one per input slice (--motion auto) */
 };
 
 lsm_status lsm_flows_create(const lsm_slice_source *src, int rank, int size,
-                            const lsm_flows_lender *lender, lsm_flows **out, lsm_err *err) {
+                            const lsm_flows_lender *lender, const lsm_progress *progress,
+                            lsm_flows **out, lsm_err *err) {
   const size_t pairs = src->count - 1;
   lsm_flows *f = lsm_alloc(1, sizeof *f, err, "field cache");
   if (!f) return err ? err->status : LSM_ERR_NOMEM;
   f->pairs = pairs;
   f->src = src;
   f->lender = lender;
+  f->progress = progress;
   f->rank = rank;
   f->size = size < 1 ? 1 : size;
   f->slots = lsm_alloc(pairs ? pairs : 1, sizeof *f->slots, err, "field cache");
@@ -136,6 +139,8 @@ static lsm_status choose(lsm_flows *flows, size_t pair, const lsm_slice *a, cons
     }
     lsm_grid_destroy(&pa);
     lsm_grid_destroy(&pb);
+    if (st == LSM_OK && needs && flows->progress && flows->progress->trying)
+      flows->progress->trying(flows->progress->ctx, pair, flows->pairs);
     /* until a slice the field predicts no better: the pair then stays in place */
     for (size_t j = pair; st == LSM_OK && needs && j <= pair + 1 &&
                           slot->choice.field_better == slot->choice.tests;

@@ -31,9 +31,10 @@ typedef struct lsm_flows_lender {
 
 /* The cache of the stack src (its count - 1 pairs), whose gaps g with g % size == rank run
  * here.  src is kept for --motion auto's choices (lsm_choose); lender: NULL, or the run a
- * prediction borrows fields from. */
+ * prediction borrows fields from; progress: NULL, or the run's, told when a pair is tried. */
 lsm_status lsm_flows_create(const lsm_slice_source *src, int rank, int size,
-                            const lsm_flows_lender *lender, lsm_flows **out, lsm_err *err);
+                            const lsm_flows_lender *lender, const lsm_progress *progress,
+                            lsm_flows **out, lsm_err *err);
 void lsm_flows_destroy(lsm_flows **flows);
 
 /* The margin of the canvas the fields are computed on (an unaligned gap's). */

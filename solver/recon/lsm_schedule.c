@@ -325,7 +325,8 @@ lsm_status lsm_schedule_run(lsm_run *r, lsm_pair_stats *stats, lsm_err *err) {
   r->gap_workers = workers;
   if (st == LSM_OK && opts->motion != LSM_MOTION_NONE)
     st = lsm_flows_create(src, distributed ? opts->transport->rank : 0,
-                          distributed ? opts->transport->size : 1, opts->lender, &r->flows, err);
+                          distributed ? opts->transport->size : 1, opts->lender, r->progress,
+                          &r->flows, err);
   if (st == LSM_OK && distributed) {
     st = run_distributed(r, plan, &grid, stats, err);
   } else if (st == LSM_OK && workers == 1) {

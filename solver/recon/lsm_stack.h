@@ -239,6 +239,10 @@ typedef struct lsm_progress {
   void *ctx;
   /* Called after each output slice: done of total (total 0 when unknown). */
   void (*update)(void *ctx, size_t done, size_t total, size_t pair, size_t pairs);
+  /* NULL, or called as --motion auto begins to try pair `pair` of `pairs` by leaving its
+   * slices out (lsm_choose), which takes a while before the pair writes anything; from the
+   * gap's thread, concurrently with update: the callee serialises. */
+  void (*trying)(void *ctx, size_t pair, size_t pairs);
 } lsm_progress;
 
 /* The output slice spacing of default mode: --dz, or when it is not set the
