@@ -291,18 +291,23 @@ static void run_default(const disc *d, const double *z, size_t count, lsm_motion
   run_opts(d, z, count, o, c, stats);
 }
 
+/* A thin ellipse turning 40 degrees per gap, five slices 8 apart. */
+static void turning_ellipse(disc d[5], double z[5]) {
+  const double deg = 3.14159265358979323846 / 180.0;
+  for (int k = 0; k < 5; ++k) {
+    d[k] = (disc){48, 32, 16, 3, 40 * k * deg};
+    z[k] = 8 * k;
+  }
+}
+
 /* The thin ellipse turning 40 degrees per gap over five slices: leaving each inner slice
  * out, the field predicts it better than the morph in place, so every pair takes the field
  * and the run is --motion field's, float for float. */
 static void test_auto_turning(void **state) {
   (void)state;
-  const double deg = 3.14159265358979323846 / 180.0;
   disc d[5];
   double z[5];
-  for (int k = 0; k < 5; ++k) {
-    d[k] = (disc){48, 32, 16, 3, 40 * k * deg};
-    z[k] = 8 * k;
-  }
+  turning_ellipse(d, z);
   stack_ctx autoc, field;
   lsm_pair_stats sa[4], sf[4];
   run_default(d, z, 5, LSM_MOTION_AUTO, &autoc, sa);
@@ -340,13 +345,9 @@ static void count_trying(void *ctx, size_t pair, size_t pairs) {
 
 static void test_auto_tells_progress(void **state) {
   (void)state;
-  const double deg = 3.14159265358979323846 / 180.0;
   disc d[5];
   double z[5];
-  for (int k = 0; k < 5; ++k) {
-    d[k] = (disc){48, 32, 16, 3, 40 * k * deg};
-    z[k] = 8 * k;
-  }
+  turning_ellipse(d, z);
   for (int motion = 0; motion < 2; ++motion) {
     tried_log t = {0, {0}, 0};
     const lsm_progress progress = {&t, count_update, count_trying};
