@@ -165,7 +165,7 @@ lsm_status lsm_check_inputs(const lsm_cli *cli, const lsm_slice_files *src, cons
 #define LSM_MEM_MESH_PER_PIXEL 96.0
 /* --motion field and auto: the pair's registration and its field (the velocity, the
  * exponentials both ways, the warped distances, the update and the smoothing's scratch, at
- * full resolution and the coarser levels; measured 42 to 47 B a cell at 512^2 to 2048^2). */
+ * full resolution and the coarser levels; limits.md has the peaks). */
 #define LSM_MEM_FIELD_PER_CELL 64.0
 #define LSM_MEM_WRITER_QUEUE (64.0 * 1048576.0)
 

@@ -200,12 +200,12 @@ lsm_status lsm_gap_setup(const lsm_stack_opts *o, int width, int height, const l
   const int nx = width + 2 * f->pad, ny = height + 2 * f->pad_y;
   if (o->canvas_max > 0.0 && (double)nx * (double)ny > o->canvas_max) {
     st = lsm_fail(err, LSM_ERR_LIMIT, NULL,
-                    "the gap from height %g to %g: its shape moved by %d x %d px, and aligned it "
-                    "is worked on a canvas of %dx%d cells, more than the %.0f cells the memory "
-                    "left allows (--max-memory): --align none works in place, or allow more "
-                    "with --max-memory BYTES",
-                    w->z[1], w->z[2], f->dx[2] - f->dx[1], f->dy[2] - f->dy[1], nx, ny,
-                    o->canvas_max);
+                  "the gap from height %g to %g: its shape moved by %d x %d px, and aligned it "
+                  "is worked on a canvas of %dx%d cells, more than the %.0f cells the memory "
+                  "left allows (--max-memory): --align none works in place, or allow more "
+                  "with --max-memory BYTES",
+                  w->z[1], w->z[2], f->dx[2] - f->dx[1], f->dy[2] - f->dy[1], nx, ny,
+                  o->canvas_max);
     lsm_gap_free(g);
     return st;
   }

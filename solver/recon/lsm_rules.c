@@ -13,9 +13,8 @@ typedef struct rule_text {
 static const rule_text rule_texts[LSM_RULE_COUNT] = {LSM_RULE_LIST(LSM_RULE_TEXT)};
 #undef LSM_RULE_TEXT
 
-/* Rules removed after the ablation (validation/measurements/ablation.md,
- * session 5): what switching them off fell back to is how lsmorph works now,
- * so --rules-off still takes their names and has nothing left to do. */
+/* Removed rules: their fallback is how lsmorph works, so --rules-off takes
+ * their names (scripts pass them) and has nothing to switch off. */
 static const char *const removed_rules[] = {"align-in-place", "align-best-shift", "parts-clear",
                                             "parts-iou"};
 #define REMOVED_RULES (sizeof removed_rules / sizeof removed_rules[0])
