@@ -327,6 +327,36 @@ static void test_sdf_disc(void **state) {
   lsm_mask_free(&m);
 }
 
+/* Random blobs, at the borders or not: phi from brute-force distances, both pixel shapes. */
+static void test_sdf_random_vs_brute(void **state) {
+  (void)state;
+  uint64_t rng = 0x2545F4914F6CDD1Dull;
+  for (int c = 0; c < 60; ++c) {
+    const int w = 1 + (int)(lsm_test_rand(&rng) % 30), h = 1 + (int)(lsm_test_rand(&rng) % 30);
+    const float dx = c % 2 ? 0.7f : 1.0f, dy = c % 2 ? 1.3f : 1.0f;
+    lsm_mask m = new_mask(w, h);
+    for (int b = (int)(lsm_test_rand(&rng) % 4), i0, j0, bw, bh; b >= 0; --b) {
+      i0 = (int)(lsm_test_rand(&rng) % 30), j0 = (int)(lsm_test_rand(&rng) % 30);
+      bw = 1 + (int)(lsm_test_rand(&rng) % 9), bh = 1 + (int)(lsm_test_rand(&rng) % 9);
+      for (int k = 0; k < bw * bh; ++k) set_px(&m, i0 + k % bw, j0 + k / bw);
+    }
+    const size_t n = (size_t)w * (size_t)h;
+    uint8_t *out = malloc(n);
+    double *d_in = malloc(n * sizeof(double)), *d_out = malloc(n * sizeof(double));
+    assert_true(out && d_in && d_out);
+    for (size_t k = 0; k < n; ++k) out[k] = !m.pixels[k];
+    brute_edt(m.pixels, w, h, dx, dy, d_out), brute_edt(out, w, h, dx, dy, d_in);
+    lsm_grid *phi = new_grid(w, h, dx, dy);
+    assert_int_equal(lsm_sdf_from_mask(&m, phi, NULL), LSM_OK);
+    const double half = 0.5 * (double)(dx < dy ? dx : dy);
+    for (size_t k = 0; k < n; ++k) /* (empty or full: no finite distance, LSM_SDF_FAR) */
+      if (!isinf(d_out[k]) && !isinf(d_in[k]))
+        assert_close(LSM_AT(phi, (int)(k % (size_t)w), (int)(k / (size_t)w)),
+                     m.pixels[k] ? -(sqrt(d_in[k]) - half) : sqrt(d_out[k]) - half, 1e-5);
+    free(out), free(d_in), free(d_out), lsm_mask_free(&m), lsm_grid_destroy(&phi);
+  }
+}
+
 static void test_sdf_empty_full_and_errors(void **state) {
   (void)state;
   lsm_mask m = new_mask(7, 5);
@@ -745,6 +775,7 @@ int main(void) {
       cmocka_unit_test(test_sdf_half_plane),
       cmocka_unit_test(test_sdf_disc),
       cmocka_unit_test(test_sdf_anisotropic),
+      cmocka_unit_test(test_sdf_random_vs_brute),
       cmocka_unit_test(test_sdf_empty_full_and_errors),
       cmocka_unit_test(test_fill_small_exact),
       cmocka_unit_test(test_fill_disc),

@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "solver/base/lsm_flood.h"
 
@@ -20,9 +21,8 @@ static inline int32_t cell_class(float phi, float thin) {
  * components of its outside that neither reach the border nor hold an open
  * cell.  (4-connected: the dual of the 8-connected insides of
  * lsm_grid_label_components, so an outside closed by a diagonal step of the
- * inside is closed.)  On return cls[k] is 1 on those cells and 0 elsewhere;
- * queue holds nx * ny cells.  Returns the number of cells marked. */
-static size_t mark_enclosed(int32_t *cls, int nx, int ny, int32_t *queue) {
+ * inside is closed.)  On return cls[k] is 1 on those cells and 0 elsewhere. */
+static size_t mark_enclosed_in(int32_t *cls, int nx, int ny, int32_t *queue) {
   const size_t n = (size_t)nx * (size_t)ny;
   size_t tail = 0;
   for (size_t k = 0; k < n; ++k) {
@@ -39,6 +39,47 @@ static size_t mark_enclosed(int32_t *cls, int nx, int ny, int32_t *queue) {
     cls[k] = cls[k] == CELL_OUTSIDE;
     marked += (size_t)cls[k];
   }
+  return marked;
+}
+
+/* mark_enclosed_in on the box of the inside cells: an enclosed outside lies
+ * within it, and an outside cell on the box's edge is joined to the border by
+ * the cells beyond, which are all outside.  The box is compacted to the front
+ * of cls and moved back; the cells beyond it get 0.  queue holds nx * ny
+ * cells.  Returns the number of cells marked. */
+static size_t mark_enclosed(int32_t *cls, int nx, int ny, int32_t *queue) {
+  int i0 = nx, i1 = -1, j0 = ny, j1 = -1;
+  for (int j = 0; j < ny; ++j) {
+    const int32_t *row = cls + (size_t)j * (size_t)nx;
+    for (int i = 0; i < nx; ++i) {
+      if (row[i] != CELL_INSIDE) continue;
+      i0 = i < i0 ? i : i0;
+      i1 = i > i1 ? i : i1;
+      j0 = j < j0 ? j : j0;
+      j1 = j;
+    }
+  }
+  const size_t n = (size_t)nx * (size_t)ny, cell = sizeof *cls;
+  if (i1 < 0) {
+    memset(cls, 0, n * cell);
+    return 0;
+  }
+  const int bw = i1 - i0 + 1, bh = j1 - j0 + 1;
+  const size_t box_w = (size_t)bw;
+  for (int r = 0; r < bh; ++r)
+    memmove(cls + (size_t)r * box_w, cls + (size_t)(j0 + r) * (size_t)nx + (size_t)i0,
+            box_w * cell);
+  const size_t marked = mark_enclosed_in(cls, bw, bh, queue);
+  for (int r = bh - 1; r >= 0; --r)
+    memmove(cls + (size_t)(j0 + r) * (size_t)nx + (size_t)i0, cls + (size_t)r * box_w,
+            box_w * cell);
+  memset(cls, 0, (size_t)j0 * (size_t)nx * cell);
+  for (int j = j0; j <= j1; ++j) {
+    int32_t *row = cls + (size_t)j * (size_t)nx;
+    memset(row, 0, (size_t)i0 * cell);
+    memset(row + i1 + 1, 0, (size_t)(nx - 1 - i1) * cell);
+  }
+  memset(cls + (size_t)(j1 + 1) * (size_t)nx, 0, (size_t)(ny - 1 - j1) * (size_t)nx * cell);
   return marked;
 }
 

@@ -215,11 +215,41 @@ static lsm_status check_slice(const lsm_mask *mask, const lsm_grid *phi, const c
   return LSM_OK;
 }
 
+/* The box of a mask's inside pixels widened by one pixel within the image:
+ * columns i0..i1, rows j0..j1.  Returns the number of inside pixels. */
+static size_t inside_box(const lsm_mask *mask, int *i0, int *i1, int *j0, int *j1) {
+  const int W = mask->width, H = mask->height;
+  size_t count = 0;
+  *i0 = W;
+  *i1 = -1;
+  *j0 = H;
+  *j1 = -1;
+  for (int j = 0; j < H; ++j) {
+    const uint8_t *row = mask->pixels + (size_t)j * (size_t)W;
+    for (int i = 0; i < W; ++i) {
+      if (!row[i]) continue;
+      ++count;
+      *i0 = i < *i0 ? i : *i0;
+      *i1 = i > *i1 ? i : *i1;
+      *j0 = *j0 < H ? *j0 : j;
+      *j1 = j;
+    }
+  }
+  if (count) {
+    *i0 -= *i0 > 0;
+    *j0 -= *j0 > 0;
+    *i1 += *i1 + 1 < W;
+    *j1 += *j1 + 1 < H;
+  }
+  return count;
+}
+
 lsm_status lsm_sdf_from_mask(const lsm_mask *mask, lsm_grid *phi, lsm_err *err) {
   LSM_TRY(check_slice(mask, phi, "signed distance of a mask", err));
   const int W = mask->width, H = mask->height;
   const size_t npix = (size_t)W * (size_t)H;
-  const size_t inside = lsm_mask_count(mask);
+  int i0, i1, j0, j1;
+  const size_t inside = inside_box(mask, &i0, &i1, &j0, &j1);
   if (inside == 0 || inside == npix) {
     /* No boundary: everything is far outside (empty) or far inside (full). */
     lsm_grid_fill(phi, (inside == 0 ? LSM_SDF_FAR : -LSM_SDF_FAR) * phi->dx);
@@ -228,12 +258,20 @@ lsm_status lsm_sdf_from_mask(const lsm_mask *mask, lsm_grid *phi, lsm_err *err) 
 
   double *d2 = lsm_alloc(npix, sizeof(double), err, "signed distance");
   if (!d2) return err ? err->status : LSM_ERR_NOMEM;
-  uint8_t *outside = lsm_alloc(npix, 1, err, "signed distance");
+  /* Inside pixels find their nearest outside pixel within the box of the
+   * inside widened by one pixel: the widening is outside, and clamping a
+   * point beyond the box onto it brings it nearer.  So the second transform
+   * runs on that box only (bw x bh), with the same lines and sums. */
+  const int bw = i1 - i0 + 1, bh = j1 - j0 + 1;
+  uint8_t *outside = lsm_alloc((size_t)bw * (size_t)bh, 1, err, "signed distance");
   if (!outside) {
     free(d2);
     return err ? err->status : LSM_ERR_NOMEM;
   }
-  for (size_t k = 0; k < npix; ++k) outside[k] = mask->pixels[k] == 0;
+  for (int j = 0; j < bh; ++j)
+    for (int i = 0; i < bw; ++i)
+      outside[(size_t)j * (size_t)bw + (size_t)i] =
+          mask->pixels[(size_t)(j0 + j) * (size_t)W + (size_t)(i0 + i)] == 0;
 
   const double dx = phi->dx, dy = phi->dy;
   /* The boundary lies half a pixel from the pixel centres on either side of
@@ -246,16 +284,16 @@ lsm_status lsm_sdf_from_mask(const lsm_mask *mask, lsm_grid *phi, lsm_err *err) 
     for (int j = 0; j < H; ++j)
       for (int i = 0; i < W; ++i) {
         const size_t k = (size_t)j * (size_t)W + (size_t)i;
-        if (outside[k]) LSM_AT(phi, i, j) = (float)(sqrt(d2[k]) - half);
+        if (!mask->pixels[k]) LSM_AT(phi, i, j) = (float)(sqrt(d2[k]) - half);
       }
     /* Inside pixels: minus the distance to the nearest outside pixel centre. */
-    st = lsm_edt_squared(outside, W, H, dx, dy, d2, err);
+    st = lsm_edt_squared(outside, bw, bh, dx, dy, d2, err);
   }
   if (st == LSM_OK) {
-    for (int j = 0; j < H; ++j)
-      for (int i = 0; i < W; ++i) {
-        const size_t k = (size_t)j * (size_t)W + (size_t)i;
-        if (!outside[k]) LSM_AT(phi, i, j) = (float)(-(sqrt(d2[k]) - half));
+    for (int j = 0; j < bh; ++j)
+      for (int i = 0; i < bw; ++i) {
+        const size_t k = (size_t)j * (size_t)bw + (size_t)i;
+        if (!outside[k]) LSM_AT(phi, i0 + i, j0 + j) = (float)(-(sqrt(d2[k]) - half));
       }
     lsm_grid_fill_ghosts(phi);
   }
