@@ -85,6 +85,8 @@ def main():
     variants = [("band", lsm, []), ("full grid", lsm, ["--band", "off"])]
     if "--base" in opts:
         variants.append(("before the band", opts["--base"], []))
+    # what is not the morph nor the previews: reading, signed distances, z-profile, the volume
+    variants.append(("floor", lsm, ["--method", "blend", "--no-preview", "--no-slices"]))
     work = tempfile.mkdtemp(prefix="lsmorph-bench-band.")
     try:
         for group in ("organs", "512"):
@@ -115,6 +117,8 @@ def main():
                   % ("organ stand-ins, 128^2" if group == "organs" else "CT liver-sized, 512^2",
                      len(names), KEEP))
             for label, _, _ in variants:
+                if label == "floor":
+                    continue
                 updates, full, seconds = totals[label]
                 print("  %-16s %7.2f s wall, %7.2f s CPU, %12d cell updates (band share %.3f), "
                       "%.3g cells/s of solver time" % (label, best[label][0], best[label][1],
@@ -128,6 +132,12 @@ def main():
                 o = best["before the band"]
                 print("  band against the build before it: %.2fx wall, %.2fx CPU (target >= 3x): %s"
                       % (o[0] / b[0], o[1] / b[1], "PASS" if o[0] / b[0] >= 3 else "FAIL"))
+            fl = best["floor"]
+            print("  floor (--method blend --no-preview --no-slices: no morph, no pictures): "
+                  "%.2f s wall, %.2f s CPU" % (fl[0], fl[1]))
+            if "before the band" in best:
+                print("  3x the build before the band is %.2f s wall: %s the floor"
+                      % (o[0] / 3, "below" if o[0] / 3 < fl[0] else "above"))
             if "--mci" in opts:
                 mci = 0.0
                 for name in names:
