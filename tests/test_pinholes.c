@@ -33,10 +33,12 @@ static void enclosed_by_flood(const float *phi, int nx, int ny, float thin, uint
   free(queue);
 }
 
-/* A random field of rectangles of inside (-1), thin outside (0.5) and open
- * outside (5) cells over a background of one of the three. */
-static void random_field(lsm_grid *g, uint64_t *seed) {
+/* A new nx x ny field of random rectangles of inside (-1), thin outside (0.5)
+ * and open outside (5) cells over a background of one of the three. */
+static lsm_grid *random_field(int nx, int ny, uint64_t *seed) {
   static const float values[3] = {-1.0f, 0.5f, 5.0f};
+  lsm_grid *g = NULL;
+  assert_int_equal(lsm_grid_create(nx, ny, 1.0f, 1.0f, &g, NULL), LSM_OK);
   const float background = values[lsm_test_rand(seed) % 3];
   for (int j = 0; j < g->ny; ++j)
     for (int i = 0; i < g->nx; ++i) LSM_AT(g, i, j) = background;
@@ -49,6 +51,7 @@ static void random_field(lsm_grid *g, uint64_t *seed) {
     for (int j = j0; j < j0 + h && j < g->ny; ++j)
       for (int i = i0; i < i0 + w && i < g->nx; ++i) LSM_AT(g, i, j) = v;
   }
+  return g;
 }
 
 static void copy_field(const lsm_grid *g, float *out) {
@@ -66,11 +69,7 @@ static void test_find_equals_whole_image_flood(void **state) {
   lsm_err_clear(&err);
   for (int trial = 0; trial < 400; ++trial) {
     const int nx = 1 + (int)(lsm_test_rand(&seed) % 24), ny = 1 + (int)(lsm_test_rand(&seed) % 24);
-    lsm_grid *a = NULL, *b = NULL;
-    assert_int_equal(lsm_grid_create(nx, ny, 1.0f, 1.0f, &a, &err), LSM_OK);
-    assert_int_equal(lsm_grid_create(nx, ny, 1.0f, 1.0f, &b, &err), LSM_OK);
-    random_field(a, &seed);
-    random_field(b, &seed);
+    lsm_grid *a = random_field(nx, ny, &seed), *b = random_field(nx, ny, &seed);
     const size_t n = (size_t)nx * (size_t)ny;
     float *fa = malloc(n * sizeof *fa), *fb = malloc(n * sizeof *fb);
     uint8_t *ea = malloc(n), *eb = malloc(n);
@@ -105,9 +104,7 @@ static void test_has_hole_equals_whole_image_flood(void **state) {
   lsm_err_clear(&err);
   for (int trial = 0; trial < 400; ++trial) {
     const int nx = 1 + (int)(lsm_test_rand(&seed) % 24), ny = 1 + (int)(lsm_test_rand(&seed) % 24);
-    lsm_grid *g = NULL;
-    assert_int_equal(lsm_grid_create(nx, ny, 1.0f, 1.0f, &g, &err), LSM_OK);
-    random_field(g, &seed);
+    lsm_grid *g = random_field(nx, ny, &seed);
     const size_t n = (size_t)nx * (size_t)ny;
     lsm_mask m;
     assert_int_equal(lsm_mask_create(nx, ny, &m, &err), LSM_OK);
