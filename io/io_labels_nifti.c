@@ -109,6 +109,43 @@ static void ras_affine(const nifti_image *nim, double m[3][4]) {
   m[2][2] = nim->dz;
 }
 
+/* nifticlib sets NaN and Inf float samples to 0 as it loads them: they are put
+ * back from the file, so that the label-map check (lsm_labels_to_integer)
+ * refuses them as it does in NRRD files, instead of a damaged voxel becoming
+ * background. */
+static lsm_status restore_nonfinite(lsm_label_file *f, const nifti_image *nim, lsm_err *err) {
+  const lsm_voxels *v = &f->vox;
+  if (v->type != LSM_VOXEL_F32 && v->type != LSM_VOXEL_F64) return LSM_OK;
+  const size_t size = lsm_voxel_size(v->type), count = v->n[0] * v->n[1] * v->n[2];
+  gzFile gz = gzopen(f->path, "rb");
+  if (!gz || nim->iname_offset < 0 || gzseek(gz, (z_off_t)nim->iname_offset, SEEK_SET) < 0) {
+    if (gz) gzclose(gz);
+    return lsm_fail(err, LSM_ERR_INPUT, f->path, "cannot read the samples again");
+  }
+  const int swap = nim->byteorder != nifti_short_order();
+  unsigned char buf[1 << 16];
+  lsm_status st = LSM_OK;
+  for (size_t done = 0; st == LSM_OK && done < count;) {
+    const size_t n = count - done < sizeof buf / size ? count - done : sizeof buf / size;
+    if (gzread(gz, buf, (unsigned)(n * size)) != (int)(n * size)) {
+      st = lsm_fail(err, LSM_ERR_INPUT, f->path, "cannot read the samples again: truncated");
+      break;
+    }
+    if (swap) nifti_swap_Nbytes((int64_t)n, (int)size, buf);
+    for (size_t k = 0; k < n; ++k) {
+      float x32;
+      double x64;
+      if (size == 4) memcpy(&x32, buf + k * size, size);
+      else memcpy(&x64, buf + k * size, size);
+      if (!isfinite(size == 4 ? (double)x32 : x64))
+        memcpy((unsigned char *)v->data + (done + k) * size, buf + k * size, size);
+    }
+    done += n;
+  }
+  gzclose(gz);
+  return st;
+}
+
 lsm_status lsm_nifti_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err *err) {
   nifti_set_debug_level(0);
   int version = 1;
@@ -161,6 +198,7 @@ lsm_status lsm_nifti_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err
                     "cannot read the samples: the file is truncated or its compressed data is "
                     "damaged");
   f->vox.data = nim->data;
+  LSM_TRY(restore_nonfinite(f, nim, err));
   f->compressed = nifti_is_gzfile(f->path);
   f->nifti2 = version == 2;
   /* lsmorph's own notes ("lsmorph...: text") travel to an output of the other format too */

@@ -116,6 +116,13 @@ def make(d):
     half = drawn.astype(np.float32)
     half[30, 20, 8] = 2.5
     nib.save(nib.Nifti1Image(half, aff), os.path.join(d, "half.nii"))
+    # NaN and Inf, which nifticlib turns into 0 as it loads (big endian: swapped back first)
+    nan = drawn.astype(">f4")
+    nan[30, 20, 8] = np.nan
+    nib.save(nib.Nifti1Image(nan, aff, dtype=np.dtype(">f4")), os.path.join(d, "nan.nii"))
+    inf = drawn.astype(np.float64)
+    inf[31, 21, 12] = -np.inf
+    nib.save(nib.Nifti2Image(inf, aff, dtype=np.float64), os.path.join(d, "inf.nii.gz"))
     far = np.diag([1e29, 1.0, 2.0, 1.0])  # 1e29 per voxel: the volume spans more than 1e30
     nib.save(nib.Nifti1Image(drawn, far), os.path.join(d, "far.nii"))
     one = np.zeros_like(lab)
