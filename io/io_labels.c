@@ -51,6 +51,9 @@ lsm_status lsm_labels_read(const char *path, uint64_t max_voxels, lsm_label_file
   if (format == LSM_LABELS_UNKNOWN)
     return lsm_fail(err, LSM_ERR_INPUT, path,
                     "not a label volume name: .nii, .nii.gz, .nrrd, .seg.nrrd or .nhdr");
+  /* a pipe or a device would block the read, or be read twice (header, then samples) */
+  if (!S_ISREG(sb.st_mode))
+    return lsm_fail(err, LSM_ERR_INPUT, path, "not a regular file (a pipe, a socket or a device)");
   lsm_label_file *f = calloc(1, sizeof *f);
   if (!f) return lsm_fail(err, LSM_ERR_NOMEM, path, "cannot allocate the header");
   f->format = format;

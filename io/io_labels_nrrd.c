@@ -19,6 +19,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <teem/nrrd.h>
@@ -139,6 +140,56 @@ static void lps_affine(const Nrrd *nrrd, double m[3][4]) {
   }
 }
 
+/* Refuses a data file named by the header that is not a regular file: a pipe
+ * or a device would block the read (teem opens it even for the header alone)
+ * or be read twice, a folder reads as empty.  The header's lines up to the
+ * first blank one are scanned for "data file: NAME" or "data file: LIST" and
+ * the names after it (header-relative unless absolute); the format form
+ * ("NAME%03d.raw MIN MAX STEP") and missing files are left to teem. */
+static lsm_status check_data_files(const lsm_label_file *f, lsm_err *err) {
+  FILE *fp = fopen(f->path, "rb");
+  if (!fp) return LSM_OK; /* teem says why */
+  char text[1 << 16];
+  const size_t got = fread(text, 1, sizeof text - 1, fp);
+  fclose(fp);
+  text[got] = '\0';
+  const char *slash = strrchr(f->path, '/');
+  const int dir_len = slash ? (int)(slash - f->path) : 0;
+  int list = 0;
+  for (char *line = text, *next; line && *line; line = next) {
+    next = strchr(line, '\n');
+    if (next) *next++ = '\0';
+    const size_t len = strlen(line);
+    if (len && line[len - 1] == '\r') line[len - 1] = '\0';
+    if (!list && !*line) break; /* the end of the header */
+    const char *name = line;
+    if (!list) {
+      const char *colon = NULL;
+      if (strncmp(line, "data file:", 10) == 0) colon = line + 9;
+      else if (strncmp(line, "datafile:", 9) == 0) colon = line + 8;
+      if (!colon) continue;
+      name = colon + 1 + strspn(colon + 1, " \t");
+      if (strncmp(name, "LIST", 4) == 0) {
+        list = 1;
+        continue;
+      }
+      if (strchr(name, ' ')) break; /* the format form */
+    }
+    if (!*name || strcmp(name, "-") == 0) continue; /* standard input, as teem reads it */
+    char path[4200];
+    const int n = name[0] == '/' || !slash
+                      ? snprintf(path, sizeof path, "%s", name)
+                      : snprintf(path, sizeof path, "%.*s/%s", dir_len, f->path, name);
+    struct stat sb;
+    if (n > 0 && (size_t)n < sizeof path && stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
+      return lsm_fail(err, LSM_ERR_INPUT, f->path,
+                      "its data file %s is not a regular file (a folder, a pipe or a device)",
+                      path);
+    if (!list) break;
+  }
+  return LSM_OK;
+}
+
 lsm_status lsm_nrrd_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err *err) {
   nrrdStateVerboseIO = 0; /* teem's progress lines on stderr */
   /* teem also reads PNG, PNM, VTK and plain text: only NRRD is taken here */
@@ -148,6 +199,7 @@ lsm_status lsm_nrrd_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err 
   if (probe) fclose(probe);
   if (got < 8 || memcmp(magic, "NRRD000", 7) != 0 || magic[7] < '1' || magic[7] > '9')
     return lsm_fail(err, LSM_ERR_INPUT, f->path, "cannot read: not a NRRD file (no NRRD000N magic)");
+  LSM_TRY(check_data_files(f, err));
   Nrrd *head = nrrdNew();
   NrrdIoState *nio = nrrdIoStateNew();
   if (!head || !nio) {

@@ -105,6 +105,16 @@ expect 2 "--axis: 'q' is not one of i, j, k, auto" "$TMP/drawn.nii.gz" -o "$TMP/
 expect 2 "end it in .nii" "$TMP/drawn.nii.gz" -o "$TMP/none.png"
 expect 2 "fill: missing -o OUT" "$TMP/drawn.nii.gz"
 check "the missing folder was not made" [ ! -e "$TMP/missing" ]
+# a pipe as LABELS or as a detached header's data file: refused, not waited on (timeout: a hang fails)
+mkfifo "$TMP/pipe.nii" "$TMP/pipe.raw"
+printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: pipe.raw\n' >"$TMP/pipe.nhdr"
+printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: LIST\n/dev/zero\n' >"$TMP/dev.nhdr"
+for f in pipe.nii pipe.nhdr dev.nhdr; do
+  timeout 30 "$LSM" fill "$TMP/$f" -o "$TMP/none.nii" >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "fill $f: exit 1 (got $rc)" [ $rc -eq 1 ]
+  check "fill $f: says it is not a regular file (said: $(head -c 300 "$TMP/e"))" grep -q "not a regular file" "$TMP/e"
+done
 # every slice drawn: a note, the volume copied
 "$LSM" fill "$TMP/truth.nii.gz" -o "$TMP/copy.nii.gz" >"$TMP/o" 2>"$TMP/e"
 rc=$?
