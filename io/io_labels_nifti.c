@@ -59,7 +59,8 @@ static int64_t int_at(const unsigned char *p, int bytes, int little) {
  * NIfTI-2 (540) in either byte order, and dim[0], the dimension count that it
  * loops over its fixed arrays with, lies in 1 .. 7 (a larger one overran its
  * stack).  *version: 1 or 2. */
-static lsm_status nifti_precheck(const char *path, int *version, lsm_err *err) {
+static lsm_status nifti_precheck(const char *path, int *version, double *vox_offset,
+                                 lsm_err *err) {
   gzFile gz = gzopen(path, "rb");
   unsigned char h[540];
   const int got = gz ? gzread(gz, h, sizeof h) : -1;
@@ -83,6 +84,15 @@ static lsm_status nifti_precheck(const char *path, int *version, lsm_err *err) {
     if (n < 1)
       return lsm_fail(err, LSM_ERR_INPUT, path, "damaged header: dimension %lld has size %lld",
                       (long long)d, (long long)n);
+  }
+  if (*version == 2) {
+    *vox_offset = (double)int_at(h + 168, 8, little);
+  } else {
+    const int64_t bits = int_at(h + 108, 4, little);
+    uint32_t u = (uint32_t)bits;
+    float x;
+    memcpy(&x, &u, sizeof x);
+    *vox_offset = x;
   }
   const int datatype = (int)int_at(h + (*version == 2 ? 12 : 70), 2, little);
   if (voxel_type_of(datatype) == LSM_VOXEL_UNKNOWN)
@@ -149,12 +159,21 @@ static lsm_status restore_nonfinite(lsm_label_file *f, const nifti_image *nim, l
 lsm_status lsm_nifti_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err *err) {
   nifti_set_debug_level(0);
   int version = 1;
-  LSM_TRY(nifti_precheck(f->path, &version, err));
+  double vox_offset = 0.0;
+  LSM_TRY(nifti_precheck(f->path, &version, &vox_offset, err));
   nifti_image *nim = nifti_image_read(f->path, 0);
   if (!nim)
     return lsm_fail(err, LSM_ERR_INPUT, f->path,
                     "cannot read: not a NIfTI-1 or NIfTI-2 file, or its header is damaged");
   f->native = nim;
+  /* where the samples start: nifticlib reads a vox_offset below the header's
+   * end (0, negative) or past 2^31 (or NaN) from byte 348, inside the header;
+   * a .nii file's samples start at 352 (NIfTI-2: 544) at the earliest, where
+   * nibabel reads them then, and one past the end is refused below */
+  const double first = version == 2 ? 544.0 : 352.0;
+  if (!(vox_offset == floor(vox_offset)) || !(fabs(vox_offset) < 9.0e15))
+    return lsm_fail(err, LSM_ERR_INPUT, f->path, "damaged header: vox_offset is %g", vox_offset);
+  nim->iname_offset = vox_offset < first ? (int64_t)first : (int64_t)vox_offset;
   /* 1 to 3 dimensions, or more of size 1 (a volume with one time point) */
   const int64_t ndim = nim->dim[0];
   if (ndim < 1 || ndim > 7)

@@ -123,6 +123,12 @@ def make(d):
     inf = drawn.astype(np.float64)
     inf[31, 21, 12] = -np.inf
     nib.save(nib.Nifti2Image(inf, aff, dtype=np.float64), os.path.join(d, "inf.nii.gz"))
+    # vox_offset 0 (nifticlib alone reads the samples from byte 348, inside the header) and NaN
+    for name, offset in (("offset0.nii", 0.0), ("offnan.nii", np.nan)):
+        nib.save(nib.Nifti1Image(drawn, aff), os.path.join(d, name))
+        with open(os.path.join(d, name), "r+b") as f:
+            f.seek(108)
+            f.write(np.float32(offset).tobytes())
     far = np.diag([1e29, 1.0, 2.0, 1.0])  # 1e29 per voxel: the volume spans more than 1e30
     nib.save(nib.Nifti1Image(drawn, far), os.path.join(d, "far.nii"))
     one = np.zeros_like(lab)

@@ -47,6 +47,9 @@ fill drawn.nii.gz t1.nii.gz --threads 1
 fill drawn.nii.gz t3.nii.gz --threads 3
 fill truth.nii.gz given.nii.gz --slices 0:40:4
 run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" same "$TMP" out-drawn.nii.gz t1.nii.gz t3.nii.gz given.nii.gz
+# a NIfTI-1 whose vox_offset is 0: its samples read from byte 352, as nibabel reads them
+fill offset0.nii offset0.nii.gz
+run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" same "$TMP" out-drawn.nii.gz offset0.nii.gz
 # --labels 2,3: the others as drawn
 fill drawn.nii.gz some.nii.gz --labels 2,3
 run_checks "$TMP/log" "$PY" "$HERE/fill_check.py" labels "$TMP" drawn.nii.gz some.nii.gz out-drawn.nii.gz 2,3
@@ -88,6 +91,7 @@ expect 1 "not a label map: voxel" "$TMP/half.nii" -o "$TMP/none.nii"
 check "the file is named once" grep -q "^lsmorph: error: $TMP/half.nii: not a label map" "$TMP/e"
 expect 1 "nan.nii: not a label map: voxel (30, 20, 8) holds nan" "$TMP/nan.nii" -o "$TMP/none.nii"
 expect 1 "inf.nii.gz: not a label map: voxel (31, 21, 12) holds -inf" "$TMP/inf.nii.gz" -o "$TMP/none.nii"
+expect 1 "offnan.nii: damaged header: vox_offset is nan" "$TMP/offnan.nii" -o "$TMP/none.nii"
 expect 1 "far.nii: the voxel spacing along i is 1e+29, and" "$TMP/far.nii" -o "$TMP/none.nii"
 expect 1 "'byte skip' inside bzip2-encoded data is not supported" "$HERE/fuzz/corpus/labels/leak-teem-bzip2-skip.nrrd" -o "$TMP/none.nrrd"
 expect 1 "export the segmentation as a labelmap" "$TMP/layers.seg.nrrd" -o "$TMP/none.nrrd"
