@@ -247,6 +247,17 @@ static lsm_status folder_of(const char *path, char *dir, size_t cap, lsm_err *er
   return LSM_OK;
 }
 
+lsm_status lsm_labels_data_file(const char *path, int gz, char *out, size_t cap,
+                                size_t *name_at, lsm_err *err) {
+  const char *slash = strrchr(path, '/');
+  const size_t base = slash ? (size_t)(slash + 1 - path) : 0, len = strlen(path);
+  const int n = snprintf(out, cap, "%.*s.raw%s", (int)(len - 5), path, gz ? ".gz" : "");
+  if (len < 5 || n < 0 || (size_t)n >= cap)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "the path is too long");
+  *name_at = base;
+  return LSM_OK;
+}
+
 lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err *err) {
   if (!lsm_labels_is_volume_name(path))
     return lsm_fail(err, LSM_ERR_USAGE, path,
@@ -261,6 +272,15 @@ lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err 
                       "is the input file: write the result to another file (the drawn slices "
                       "would be lost)");
   }
+  /* a detached header's data file must not be the input's */
+  if (input && lsm_labels_ends_with(path, ".nhdr") &&
+      lsm_labels_format_of(input) == LSM_LABELS_NRRD)
+    for (int gz = 0; gz < 2; ++gz) {
+      char data[4200];
+      size_t name_at = 0;
+      LSM_TRY(lsm_labels_data_file(path, gz, data, sizeof data, &name_at, err));
+      LSM_TRY(lsm_nrrd_labels_check_data_output(input, data, err));
+    }
   char dir[4096];
   LSM_TRY(folder_of(path, dir, sizeof dir, err));
   if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))
@@ -309,12 +329,10 @@ lsm_status lsm_labels_write(lsm_label_file *f, const char *path, lsm_err *err) {
   const int detached = lsm_labels_ends_with(path, ".nhdr");
   if (detached) {
     /* the data file beside the header: NAME.raw or NAME.raw.gz */
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
-    const int gz = f->compressed;
-    snprintf(data_name, sizeof data_name, "%.*s.raw%s", (int)(strlen(base) - 5), base,
-             gz ? ".gz" : "");
-    snprintf(data_final, sizeof data_final, "%.*s%s", (int)(base - path), path, data_name);
+    size_t name_at = 0;
+    LSM_TRY(lsm_labels_data_file(path, f->compressed, data_final, sizeof data_final, &name_at,
+                                 err));
+    snprintf(data_name, sizeof data_name, "%s", data_final + name_at);
     LSM_TRY(make_temp(data_final, data_tmp, sizeof data_tmp, &data_fd, err));
   }
   lsm_status st = make_temp(path, tmp, sizeof tmp, &fd, err);

@@ -51,6 +51,16 @@ lsm_status lsm_nrrd_labels_write(lsm_label_file *f, int fd, const char *tmp, int
                                  const char *data_tmp, const char *data_name, const char *path,
                                  lsm_err *err);
 
+/* Refuses data_out, a detached output header's data file, when it is one of
+ * the data files the NRRD header input names. */
+lsm_status lsm_nrrd_labels_check_data_output(const char *input, const char *data_out,
+                                             lsm_err *err);
+
+/* The data file written beside a detached header path (NAME.nhdr):
+ * NAME.raw, or NAME.raw.gz when gz; *name_at: where its name starts. */
+lsm_status lsm_labels_data_file(const char *path, int gz, char *out, size_t cap,
+                                size_t *name_at, lsm_err *err);
+
 /* A note read from the input's header (NULL when absent). */
 const char *lsm_nifti_labels_note(const lsm_label_file *f, const char *key);
 const char *lsm_nrrd_labels_note(const lsm_label_file *f, const char *key);

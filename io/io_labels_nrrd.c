@@ -140,21 +140,22 @@ static void lps_affine(const Nrrd *nrrd, double m[3][4]) {
   }
 }
 
-/* Refuses a data file named by the header that is not a regular file: a pipe
- * or a device would block the read (teem opens it even for the header alone)
- * or be read twice, a folder reads as empty.  The header's lines up to the
- * first blank one are scanned for "data file: NAME" or "data file: LIST" and
- * the names after it (header-relative unless absolute); the format form
- * ("NAME%03d.raw MIN MAX STEP") and missing files are left to teem. */
-static lsm_status check_data_files(const lsm_label_file *f, lsm_err *err) {
-  FILE *fp = fopen(f->path, "rb");
+/* Calls visit on each data file a header names that exists: its lines up to
+ * the first blank one are scanned for "data file: NAME" or "data file: LIST"
+ * and the names after it (header-relative unless absolute), as teem reads
+ * them; the format form ("NAME%03d.raw MIN MAX STEP") is left to teem. */
+typedef lsm_status (*data_file_visit)(const char *header, const char *data, const struct stat *sb,
+                                      const void *ctx, lsm_err *err);
+static lsm_status each_data_file(const char *header, data_file_visit visit, const void *ctx,
+                                 lsm_err *err) {
+  FILE *fp = fopen(header, "rb");
   if (!fp) return LSM_OK; /* teem says why */
   char text[1 << 16];
   const size_t got = fread(text, 1, sizeof text - 1, fp);
   fclose(fp);
   text[got] = '\0';
-  const char *slash = strrchr(f->path, '/');
-  const int dir_len = slash ? (int)(slash - f->path) : 0;
+  const char *slash = strrchr(header, '/');
+  const int dir_len = slash ? (int)(slash - header) : 0;
   int list = 0;
   for (char *line = text, *next; line && *line; line = next) {
     next = strchr(line, '\n');
@@ -179,15 +180,41 @@ static lsm_status check_data_files(const lsm_label_file *f, lsm_err *err) {
     char path[4200];
     const int n = name[0] == '/' || !slash
                       ? snprintf(path, sizeof path, "%s", name)
-                      : snprintf(path, sizeof path, "%.*s/%s", dir_len, f->path, name);
+                      : snprintf(path, sizeof path, "%.*s/%s", dir_len, header, name);
     struct stat sb;
-    if (n > 0 && (size_t)n < sizeof path && stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
-      return lsm_fail(err, LSM_ERR_INPUT, f->path,
-                      "its data file %s is not a regular file (a folder, a pipe or a device)",
-                      path);
+    if (n > 0 && (size_t)n < sizeof path && stat(path, &sb) == 0)
+      LSM_TRY(visit(header, path, &sb, ctx, err));
     if (!list) break;
   }
   return LSM_OK;
+}
+
+/* A pipe or a device would block the read (teem opens data files even for the
+ * header alone) or be read twice; a folder reads as empty. */
+static lsm_status refuse_irregular(const char *header, const char *data, const struct stat *sb,
+                                   const void *ctx, lsm_err *err) {
+  (void)ctx;
+  if (S_ISREG(sb->st_mode)) return LSM_OK;
+  return lsm_fail(err, LSM_ERR_INPUT, header,
+                  "its data file %s is not a regular file (a folder, a pipe or a device)", data);
+}
+
+/* ctx: the stat of an output data file. */
+static lsm_status refuse_same(const char *header, const char *data, const struct stat *sb,
+                              const void *ctx, lsm_err *err) {
+  const struct stat *out = ctx;
+  (void)header;
+  if (sb->st_dev != out->st_dev || sb->st_ino != out->st_ino) return LSM_OK;
+  return lsm_fail(err, LSM_ERR_INPUT, data,
+                  "is the input's data file: write the result under another name (the drawn "
+                  "slices would be lost)");
+}
+
+lsm_status lsm_nrrd_labels_check_data_output(const char *input, const char *data_out,
+                                             lsm_err *err) {
+  struct stat out;
+  if (stat(data_out, &out) != 0) return LSM_OK;
+  return each_data_file(input, refuse_same, &out, err);
 }
 
 lsm_status lsm_nrrd_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err *err) {
@@ -199,7 +226,7 @@ lsm_status lsm_nrrd_labels_read(lsm_label_file *f, uint64_t max_voxels, lsm_err 
   if (probe) fclose(probe);
   if (got < 8 || memcmp(magic, "NRRD000", 7) != 0 || magic[7] < '1' || magic[7] > '9')
     return lsm_fail(err, LSM_ERR_INPUT, f->path, "cannot read: not a NRRD file (no NRRD000N magic)");
-  LSM_TRY(check_data_files(f, err));
+  LSM_TRY(each_data_file(f->path, refuse_irregular, NULL, err));
   Nrrd *head = nrrdNew();
   NrrdIoState *nio = nrrdIoStateNew();
   if (!head || !nio) {

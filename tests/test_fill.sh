@@ -109,6 +109,17 @@ expect 2 "--axis: 'q' is not one of i, j, k, auto" "$TMP/drawn.nii.gz" -o "$TMP/
 expect 2 "end it in .nii" "$TMP/drawn.nii.gz" -o "$TMP/none.png"
 expect 2 "fill: missing -o OUT" "$TMP/drawn.nii.gz"
 check "the missing folder was not made" [ ! -e "$TMP/missing" ]
+# a .nhdr whose data file is the one OUT's header would write beside it: refused, the data kept
+mkdir "$TMP/pair"
+sed 's/^data file: .*/data file: b.raw.gz/' "$TMP/drawn.nhdr" >"$TMP/pair/a.nhdr"
+cp "$TMP/$(sed -n 's/^data file: //p' "$TMP/drawn.nhdr")" "$TMP/pair/b.raw.gz"
+sum=$(cksum <"$TMP/pair/b.raw.gz")
+"$LSM" fill "$TMP/pair/a.nhdr" -o "$TMP/pair/b.nhdr" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "OUT's data file is the input's: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "OUT's data file is the input's: says so (said: $(head -c 300 "$TMP/e"))" grep -q "b.raw.gz: is the input's data file" "$TMP/e"
+check "OUT's data file is the input's: the input's data unchanged" [ "$(cksum <"$TMP/pair/b.raw.gz")" = "$sum" ]
+check "OUT's data file is the input's: no header written" [ ! -e "$TMP/pair/b.nhdr" ]
 # a pipe as LABELS or as a detached header's data file: refused, not waited on (timeout: a hang fails)
 mkfifo "$TMP/pipe.nii" "$TMP/pipe.raw"
 printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: pipe.raw\n' >"$TMP/pipe.nhdr"
