@@ -95,6 +95,9 @@ def write_nrrd(path, lab, aff, encoding="raw", endian="little", extra=(), detach
 def make(d):
     lab, aff = truth(), affine()
     nib.save(nib.Nifti1Image(lab, aff), os.path.join(d, "truth.nii.gz"))
+    moved = aff.copy()
+    moved[:3, 3] += (0.0, 0.0, 3.0)  # the same voxels 3 mm higher: another grid
+    nib.save(nib.Nifti1Image(lab, moved), os.path.join(d, "truth-moved.nii.gz"))
     drawn = drawn_of(lab, 2, STEP, 0)
     nib.save(nib.Nifti1Image(drawn, aff), os.path.join(d, "drawn.nii.gz"))
     nib.save(nib.Nifti2Image(drawn.astype(np.uint8), aff), os.path.join(d, "drawn2.nii"))

@@ -76,6 +76,15 @@ check "score of the truth against itself: Dice 1" grep -q '"mean": {"dice": 1,' 
 "$LSM" score "$TMP/truth.nii.gz" "$TMP/out-i.nii.gz" >"$TMP/o" 2>"$TMP/e"
 rc=$?
 check "score of volumes of other sizes: exit 1 (got $rc)" [ $rc -eq 1 ]
+"$LSM" score "$TMP/truth-moved.nii.gz" "$TMP/out-drawn.nii.gz" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "score of volumes on other grids: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "score of volumes on other grids: says so (said: $(head -c 300 "$TMP/e"))" grep -q "out-drawn.nii.gz: not on .*truth-moved.nii.gz's grid: the same voxel counts, but its origin" "$TMP/e"
+check "score of volumes on other grids: prints no scores" [ ! -s "$TMP/o" ]
+# NRRD in, NIfTI out: the same grid, scored
+"$LSM" score "$TMP/drawn.nrrd" "$TMP/out-drawn.nii.gz" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "score of a NRRD against a NIfTI on its grid: exit 0 (got $rc: $(tail -c 300 "$TMP/e"))" [ $rc -eq 0 ]
 
 # ---- errors: exit 1 (2 for usage), a message, no output, before any work -------------------
 expect() { # expect RC PHRASE ARGS...

@@ -247,6 +247,34 @@ static lsm_status label_distances(const score_space *sp, label_score *sc, int *m
   return st;
 }
 
+/* The two volumes must lie on one grid (voxel i of one where voxel i of the
+ * other is): their index-to-world maps agree within a thousandth of the
+ * smallest voxel spacing (NIfTI keeps them as floats). */
+static lsm_status check_same_grid(const lsm_label_file *t, const lsm_label_file *r,
+                                  const char *result, const char *truth, lsm_err *err) {
+  double mt[3][4], mr[3][4];
+  lsm_labels_affine(t, mt);
+  lsm_labels_affine(r, mr);
+  const double *sp = lsm_labels_voxels((lsm_label_file *)t)->spacing;
+  double tol = sp[0];
+  for (int a = 1; a < 3; ++a) tol = sp[a] < tol ? sp[a] : tol;
+  tol *= 1e-3;
+  for (int c = 0; c < 4; ++c)
+    for (int row = 0; row < 3; ++row) {
+      /* a column's difference times the voxels along it: the far corner's shift */
+      const double reach = c < 3 ? (double)lsm_labels_voxels((lsm_label_file *)t)->n[c] : 1.0;
+      if (!(fabs(mt[row][c] - mr[row][c]) * reach <= tol))
+        return lsm_fail(err, LSM_ERR_INPUT, result,
+                        "not on %s's grid: the same voxel counts, but its %s%s is (%g, %g, %g) "
+                        "in LPS, and %s's (%g, %g, %g); score volumes on one grid (resample one "
+                        "onto the other with nearest neighbour)",
+                        truth, c < 3 ? "voxel step along " : "origin",
+                        c < 3 ? (const char[]){"ijk"[c], '\0'} : "", mr[0][c], mr[1][c],
+                        mr[2][c], truth, mt[0][c], mt[1][c], mt[2][c]);
+    }
+  return LSM_OK;
+}
+
 lsm_status lsm_label_score_main(int argc, char **argv, lsm_err *err) {
   score_args a;
   lsm_status st = parse_score(argc, argv, &a, err);
@@ -261,6 +289,7 @@ lsm_status lsm_label_score_main(int argc, char **argv, lsm_err *err) {
   if (st == LSM_OK && memcmp(t->n, r->n, sizeof t->n) != 0)
     st = lsm_fail(err, LSM_ERR_INPUT, a.result, "%zu x %zu x %zu voxels, but %s has %zu x %zu x %zu",
                   r->n[0], r->n[1], r->n[2], a.truth, t->n[0], t->n[1], t->n[2]);
+  if (st == LSM_OK) st = check_same_grid(ft, fr, a.result, a.truth, err);
   if (st == LSM_OK && !a.slices) {
     const char *note = lsm_labels_note(fr, "lsmorph_fill");
     if (!note)
