@@ -94,6 +94,24 @@ static lsm_status nifti_precheck(const char *path, int *version, double *vox_off
     memcpy(&x, &u, sizeof x);
     *vox_offset = x;
   }
+  /* the voxel sizes, where the affine is made of them (no sform): nifticlib
+   * takes a NaN or infinite one as 1 without a word */
+  const int64_t sform = *version == 2 ? int_at(h + 348, 4, little) : int_at(h + 254, 2, little);
+  for (int a = 0; a < 3 && sform <= 0; ++a) {
+    double size;
+    if (*version == 2) {
+      const uint64_t u = (uint64_t)int_at(h + 112 + 8 * a, 8, little);
+      memcpy(&size, &u, sizeof size);
+    } else {
+      const uint32_t u = (uint32_t)int_at(h + 80 + 4 * a, 4, little);
+      float x;
+      memcpy(&x, &u, sizeof x);
+      size = x;
+    }
+    if (!isfinite(size))
+      return lsm_fail(err, LSM_ERR_INPUT, path, "the voxel spacing along %c is %g (pixdim[%d]): "
+                      "not a length", "ijk"[a], size, a + 1);
+  }
   const int datatype = (int)int_at(h + (*version == 2 ? 12 : 70), 2, little);
   if (voxel_type_of(datatype) == LSM_VOXEL_UNKNOWN)
     return lsm_fail(err, LSM_ERR_INPUT, path,

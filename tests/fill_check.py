@@ -132,6 +132,13 @@ def make(d):
         with open(os.path.join(d, name), "r+b") as f:
             f.seek(108)
             f.write(np.float32(offset).tobytes())
+    # pixdim[3] NaN in a qform-only header (nifticlib alone takes it as 1)
+    nib.save(nib.Nifti1Image(drawn, aff), os.path.join(d, "pixnan.nii"))
+    with open(os.path.join(d, "pixnan.nii"), "r+b") as f:
+        f.seek(88)
+        f.write(np.float32(np.nan).tobytes())
+        f.seek(252)
+        f.write(np.array([1, 0], "<i2").tobytes())
     far = np.diag([1e29, 1.0, 2.0, 1.0])  # 1e29 per voxel: the volume spans more than 1e30
     nib.save(nib.Nifti1Image(drawn, far), os.path.join(d, "far.nii"))
     one = np.zeros_like(lab)

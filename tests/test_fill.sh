@@ -101,6 +101,7 @@ check "the file is named once" grep -q "^lsmorph: error: $TMP/half.nii: not a la
 expect 1 "nan.nii: not a label map: voxel (30, 20, 8) holds nan" "$TMP/nan.nii" -o "$TMP/none.nii"
 expect 1 "inf.nii.gz: not a label map: voxel (31, 21, 12) holds -inf" "$TMP/inf.nii.gz" -o "$TMP/none.nii"
 expect 1 "offnan.nii: damaged header: vox_offset is nan" "$TMP/offnan.nii" -o "$TMP/none.nii"
+expect 1 "pixnan.nii: the voxel spacing along k is nan (pixdim[3]): not a length" "$TMP/pixnan.nii" -o "$TMP/none.nii"
 expect 1 "far.nii: the voxel spacing along i is 1e+29, and" "$TMP/far.nii" -o "$TMP/none.nii"
 expect 1 "'byte skip' inside bzip2-encoded data is not supported" "$HERE/fuzz/corpus/labels/leak-teem-bzip2-skip.nrrd" -o "$TMP/none.nrrd"
 expect 1 "export the segmentation as a labelmap" "$TMP/layers.seg.nrrd" -o "$TMP/none.nrrd"
