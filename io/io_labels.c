@@ -267,6 +267,12 @@ lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err 
   if (stat(path, &sb) == 0) {
     if (S_ISDIR(sb.st_mode))
       return lsm_fail(err, LSM_ERR_INPUT, path, "is a folder: name the output file");
+    /* OUT is written beside its name and renamed into place: that would replace
+     * a pipe or a device node by a plain file */
+    if (!S_ISREG(sb.st_mode))
+      return lsm_fail(err, LSM_ERR_INPUT, path,
+                      "is not a regular file (a pipe, a socket or a device), which the result "
+                      "would replace: name a file");
     if (input && stat(input, &in) == 0 && in.st_dev == sb.st_dev && in.st_ino == sb.st_ino)
       return lsm_fail(err, LSM_ERR_INPUT, path,
                       "is the input file: write the result to another file (the drawn slices "

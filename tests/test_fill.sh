@@ -132,6 +132,12 @@ check "OUT's data file is the input's: the input's data unchanged" [ "$(cksum <"
 check "OUT's data file is the input's: no header written" [ ! -e "$TMP/pair/b.nhdr" ]
 # a pipe as LABELS or as a detached header's data file: refused, not waited on (timeout: a hang fails)
 mkfifo "$TMP/pipe.nii" "$TMP/pipe.raw"
+# ... and as OUT: refused, not replaced by a plain file
+timeout 30 "$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/pipe.nii" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "fill -o a pipe: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "fill -o a pipe: says so (said: $(head -c 300 "$TMP/e"))" grep -q "pipe.nii: is not a regular file" "$TMP/e"
+check "fill -o a pipe: the pipe is still there" [ -p "$TMP/pipe.nii" ]
 printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: pipe.raw\n' >"$TMP/pipe.nhdr"
 printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: LIST\n/dev/zero\n' >"$TMP/dev.nhdr"
 for f in pipe.nii pipe.nhdr dev.nhdr; do
