@@ -77,6 +77,20 @@ lsm_status lsm_labels_read(const char *path, uint64_t max_voxels, lsm_label_file
       lsm_labels_free(&f);
       return LSM_ERR_INPUT;
     }
+  /* parallel voxel axes (a singular index-to-world map) put the volume on a
+   * plane or a line: a damaged header, not a sheared grid */
+  double (*m)[4] = f->affine;
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  const double *sp = f->vox.spacing;
+  if (!(fabs(det) / sp[0] / sp[1] / sp[2] > 1e-6)) {
+    lsm_fail(err, LSM_ERR_INPUT, path,
+             "the grid's voxel axes are parallel (its index-to-world matrix is singular): a "
+             "damaged header");
+    lsm_labels_free(&f);
+    return LSM_ERR_INPUT;
+  }
   *out = f;
   return LSM_OK;
 }

@@ -139,6 +139,9 @@ def make(d):
         f.write(np.float32(np.nan).tobytes())
         f.seek(252)
         f.write(np.array([1, 0], "<i2").tobytes())
+    parallel = aff.copy()
+    parallel[:3, 1] = aff[:3, 0]  # the j axis along the i axis: a singular grid
+    write_nrrd(os.path.join(d, "parallel.nrrd"), drawn, parallel)
     far = np.diag([1e29, 1.0, 2.0, 1.0])  # 1e29 per voxel: the volume spans more than 1e30
     nib.save(nib.Nifti1Image(drawn, far), os.path.join(d, "far.nii"))
     one = np.zeros_like(lab)
