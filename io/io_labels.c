@@ -187,6 +187,14 @@ lsm_status lsm_labels_to_integer(lsm_label_file *f, int *converted, lsm_err *err
   double lo = 0.0, hi = 0.0;
   for (size_t k = 0; k < count; ++k) {
     const double x = lsm_voxel_get(v, k);
+    if (x == floor(x) && isfinite(x) && !(fabs(x) <= 9.0e15)) {
+      size_t at[3];
+      voxel_ijk(v, k, at);
+      return lsm_fail(err, LSM_ERR_INPUT, f->path,
+                      "not a label map: voxel (%zu, %zu, %zu) holds %.17g, past the labels a "
+                      "floating-point volume holds exactly (up to 9e15; store labels as integers)",
+                      at[0], at[1], at[2], x);
+    }
     if (!(x == floor(x)) || !(fabs(x) <= 9.0e15)) {
       size_t at[3];
       voxel_ijk(v, k, at);

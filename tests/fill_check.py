@@ -142,6 +142,9 @@ def make(d):
     parallel = aff.copy()
     parallel[:3, 1] = aff[:3, 0]  # the j axis along the i axis: a singular grid
     write_nrrd(os.path.join(d, "parallel.nrrd"), drawn, parallel)
+    big = drawn.astype(np.float64)
+    big[30, 20, 8] = 1e16  # a whole number, past what a double holds exactly
+    nib.save(nib.Nifti1Image(big, aff, dtype=np.float64), os.path.join(d, "big.nii"))
     far = np.diag([1e29, 1.0, 2.0, 1.0])  # 1e29 per voxel: the volume spans more than 1e30
     nib.save(nib.Nifti1Image(drawn, far), os.path.join(d, "far.nii"))
     one = np.zeros_like(lab)

@@ -103,6 +103,7 @@ expect 1 "inf.nii.gz: not a label map: voxel (31, 21, 12) holds -inf" "$TMP/inf.
 expect 1 "offnan.nii: damaged header: vox_offset is nan" "$TMP/offnan.nii" -o "$TMP/none.nii"
 expect 1 "pixnan.nii: the voxel spacing along k is nan (pixdim[3]): not a length" "$TMP/pixnan.nii" -o "$TMP/none.nii"
 expect 1 "parallel.nrrd: the grid's voxel axes are parallel" "$TMP/parallel.nrrd" -o "$TMP/none.nrrd"
+expect 1 "big.nii: not a label map: voxel (30, 20, 8) holds 10000000000000000, past the labels a floating-point volume holds exactly" "$TMP/big.nii" -o "$TMP/none.nii"
 expect 1 "far.nii: the voxel spacing along i is 1e+29, and" "$TMP/far.nii" -o "$TMP/none.nii"
 expect 1 "'byte skip' inside bzip2-encoded data is not supported" "$HERE/fuzz/corpus/labels/leak-teem-bzip2-skip.nrrd" -o "$TMP/none.nrrd"
 expect 1 "export the segmentation as a labelmap" "$TMP/layers.seg.nrrd" -o "$TMP/none.nrrd"
