@@ -33,6 +33,18 @@ lsm_label_format lsm_labels_format_of(const char *path) {
   return LSM_LABELS_UNKNOWN;
 }
 
+/* nifticlib takes a NIfTI name only when its ending is all lower or all upper
+ * case (.nii.gz, .NII.GZ; not .Nii.Gz). */
+static int nifti_case_ok(const char *path) {
+  const size_t n = strlen(path), m = lsm_labels_ends_with(path, ".gz") ? 7 : 4;
+  int lower = 0, upper = 0;
+  for (size_t k = n >= m ? n - m : 0; k < n; ++k) {
+    lower |= islower((unsigned char)path[k]) != 0;
+    upper |= isupper((unsigned char)path[k]) != 0;
+  }
+  return !(lower && upper);
+}
+
 int lsm_labels_is_volume_name(const char *path) {
   return lsm_labels_format_of(path) != LSM_LABELS_UNKNOWN;
 }
@@ -51,6 +63,10 @@ lsm_status lsm_labels_read(const char *path, uint64_t max_voxels, lsm_label_file
   if (format == LSM_LABELS_UNKNOWN)
     return lsm_fail(err, LSM_ERR_INPUT, path,
                     "not a label volume name: .nii, .nii.gz, .nrrd, .seg.nrrd or .nhdr");
+  if (format == LSM_LABELS_NIFTI && !nifti_case_ok(path))
+    return lsm_fail(err, LSM_ERR_INPUT, path,
+                    "cannot read a NIfTI name ending in mixed case: nifticlib reads .nii and "
+                    ".nii.gz in lower or in upper case (.NII.GZ); rename the file");
   /* a pipe or a device would block the read, or be read twice (header, then samples) */
   if (!S_ISREG(sb.st_mode))
     return lsm_fail(err, LSM_ERR_INPUT, path, "not a regular file (a pipe, a socket or a device)");
@@ -285,6 +301,10 @@ lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err 
     return lsm_fail(err, LSM_ERR_USAGE, path,
                     "the output's name says no label-volume format: end it in .nii, .nii.gz, "
                     ".nrrd, .seg.nrrd or .nhdr");
+  if (lsm_labels_format_of(path) == LSM_LABELS_NIFTI && !nifti_case_ok(path))
+    return lsm_fail(err, LSM_ERR_USAGE, path,
+                    "a NIfTI name ending in mixed case, which nifticlib (and so lsmorph) cannot "
+                    "read back: end it in .nii or .nii.gz, in lower or in upper case");
   struct stat sb, in;
   if (stat(path, &sb) == 0) {
     if (S_ISDIR(sb.st_mode))

@@ -120,6 +120,12 @@ expect 2 "--method: 'x' is not one of" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --
 expect 2 "--axis: 'q' is not one of i, j, k, auto" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --axis q
 expect 2 "end it in .nii" "$TMP/drawn.nii.gz" -o "$TMP/none.png"
 expect 2 "fill: missing -o OUT" "$TMP/drawn.nii.gz"
+expect 2 "a NIfTI name ending in mixed case" "$TMP/drawn.nii.gz" -o "$TMP/none.Nii"
+cp "$TMP/drawn.nii.gz" "$TMP/mixed.Nii.gz"
+expect 1 "mixed.Nii.gz: cannot read a NIfTI name ending in mixed case" "$TMP/mixed.Nii.gz" -o "$TMP/none.nii"
+"$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/UPPER.NII.GZ" -q --motion none >"$TMP/o" 2>"$TMP/e" &&
+  "$LSM" fill "$TMP/UPPER.NII.GZ" -o "$TMP/upper.nrrd" -q --motion none >"$TMP/o" 2>"$TMP/e"
+check "an upper-case .NII.GZ written and read back (said: $(head -c 300 "$TMP/e"))" [ $? -eq 0 ]
 check "the missing folder was not made" [ ! -e "$TMP/missing" ]
 # a .nhdr whose data file is the one OUT's header would write beside it: refused, the data kept
 mkdir "$TMP/pair"
