@@ -320,6 +320,15 @@ lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err 
                       "is the input file: write the result to another file (the drawn slices "
                       "would be lost)");
   }
+  /* a detached header names its data file on one line; teem reads a '%' in it
+   * as a template of numbered files */
+  const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+  if (lsm_labels_ends_with(path, ".nhdr"))
+    for (const char *c = base; *c; ++c)
+      if (*c == '%' || iscntrl((unsigned char)*c))
+        return lsm_fail(err, LSM_ERR_USAGE, path,
+                        "a .nhdr name holding '%%' or a control character (a line break), which "
+                        "its header's 'data file' line cannot hold: rename OUT");
   /* a detached header's data file must not be the input's */
   if (input && lsm_labels_ends_with(path, ".nhdr") &&
       lsm_labels_format_of(input) == LSM_LABELS_NRRD)

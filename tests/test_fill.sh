@@ -121,6 +121,8 @@ expect 2 "--axis: 'q' is not one of i, j, k, auto" "$TMP/drawn.nii.gz" -o "$TMP/
 expect 2 "end it in .nii" "$TMP/drawn.nii.gz" -o "$TMP/none.png"
 expect 2 "fill: missing -o OUT" "$TMP/drawn.nii.gz"
 expect 2 "a NIfTI name ending in mixed case" "$TMP/drawn.nii.gz" -o "$TMP/none.Nii"
+expect 2 "a .nhdr name holding '%'" "$TMP/drawn.nii.gz" -o "$TMP/none%d.nhdr"
+check "no data file beside the refused .nhdr" [ ! -e "$TMP/none%d.raw.gz" ]
 cp "$TMP/drawn.nii.gz" "$TMP/mixed.Nii.gz"
 expect 1 "mixed.Nii.gz: cannot read a NIfTI name ending in mixed case" "$TMP/mixed.Nii.gz" -o "$TMP/none.nii"
 "$LSM" fill "$TMP/drawn.nii.gz" -o "$TMP/UPPER.NII.GZ" -q --motion none >"$TMP/o" 2>"$TMP/e" &&
