@@ -81,6 +81,14 @@ rc=$?
 check "score of volumes on other grids: exit 1 (got $rc)" [ $rc -eq 1 ]
 check "score of volumes on other grids: says so (said: $(head -c 300 "$TMP/e"))" grep -q "out-drawn.nii.gz: not on .*truth-moved.nii.gz's grid: the same voxel counts, but its origin" "$TMP/e"
 check "score of volumes on other grids: prints no scores" [ ! -s "$TMP/o" ]
+# a damaged lsmorph_fill record in OUT's header: exit 1, naming OUT
+for rec in "axis=k drawn=1,99999999999999999999 labels=1" "axis=k drawn=4,400 labels=1" "axis=kk drawn=4,8"; do
+  sed "s/^lsmorph_fill:=.*/lsmorph_fill:=$rec/" "$TMP/out-drawn.nrrd" >"$TMP/record.nrrd"
+  "$LSM" score "$TMP/drawn.nrrd" "$TMP/record.nrrd" >"$TMP/o" 2>"$TMP/e"
+  rc=$?
+  check "score, record '$rec': exit 1 (got $rc)" [ $rc -eq 1 ]
+  check "score, record '$rec': names OUT's record (said: $(head -c 300 "$TMP/e"))" grep -q "^lsmorph: error: $TMP/record.nrrd: its lsmorph_fill record" "$TMP/e"
+done
 # NRRD in, NIfTI out: the same grid, scored
 "$LSM" score "$TMP/drawn.nrrd" "$TMP/out-drawn.nii.gz" >"$TMP/o" 2>"$TMP/e"
 rc=$?

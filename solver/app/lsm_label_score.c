@@ -34,6 +34,7 @@ typedef struct score_args {
   int axis;            /* -1: from the note */
   long long *slices, *labels;
   size_t n_slices, n_labels;
+  int recorded;        /* the slices come from OUT's lsmorph_fill record */
 } score_args;
 
 static lsm_status parse_score(int argc, char **argv, score_args *a, lsm_err *err) {
@@ -94,8 +95,9 @@ static void sort_unique(long long *v, size_t *n) {
 static lsm_status from_note(const char *note, const char *path, score_args *a, lsm_err *err) {
   const char *axis = strstr(note, "axis="), *drawn = strstr(note, "drawn="),
              *labels = strstr(note, "labels=");
-  if (!axis || !drawn || !strchr("ijk", axis[5]) || !axis[5])
+  if (!axis || !drawn || !strchr("ijk", axis[5]) || !axis[5] || (axis[6] && axis[6] != ' '))
     return lsm_fail(err, LSM_ERR_INPUT, path, "its lsmorph_fill record is damaged: '%.80s'", note);
+  lsm_status st = LSM_OK;
   if (a->axis < 0) a->axis = axis[5] - 'i';
   char list[1 << 12];
   if (!a->slices) {
@@ -104,19 +106,24 @@ static lsm_status from_note(const char *note, const char *path, score_args *a, l
     if (!copy) return lsm_fail(err, LSM_ERR_NOMEM, NULL, "cannot read the record");
     memcpy(copy, drawn + 6, n);
     copy[n] = '\0';
-    const lsm_status st = lsm_fill_parse_list("drawn", copy, 0, &a->slices, &a->n_slices, err);
+    st = lsm_fill_parse_list("drawn", copy, 0, &a->slices, &a->n_slices, err);
     free(copy);
-    LSM_TRY(st);
+    a->recorded = st == LSM_OK;
   }
-  if (!a->labels && labels) {
+  if (st == LSM_OK && !a->labels && labels) {
     const size_t n = strcspn(labels + 7, " ");
     if (n > 0 && n < sizeof list) {
       memcpy(list, labels + 7, n);
       list[n] = '\0';
-      LSM_TRY(lsm_fill_parse_list("labels", list, 1, &a->labels, &a->n_labels, err));
+      st = lsm_fill_parse_list("labels", list, 1, &a->labels, &a->n_labels, err);
     }
   }
-  return LSM_OK;
+  if (st == LSM_OK || st == LSM_ERR_NOMEM) return st;
+  /* the list parser's usage message, about the file's record */
+  char what[LSM_ERR_MSG_MAX];
+  snprintf(what, sizeof what, "%s", err ? err->msg : "");
+  if (err) lsm_err_clear(err);
+  return lsm_fail(err, LSM_ERR_INPUT, path, "its lsmorph_fill record is damaged: %.300s", what);
 }
 
 typedef struct label_score {
@@ -311,10 +318,19 @@ lsm_status lsm_label_score_main(int argc, char **argv, lsm_err *err) {
     sort_unique(a.slices, &a.n_slices);
     for (size_t k = 0; k < a.n_slices && st == LSM_OK; ++k)
       if (a.slices[k] < 0 || (size_t)a.slices[k] >= t->n[a.axis])
-        st = lsm_fail(err, LSM_ERR_USAGE, NULL, "--slices: %lld is past the last slice across %c",
-                      a.slices[k], "ijk"[a.axis]);
+        st = a.recorded ? lsm_fail(err, LSM_ERR_INPUT, a.result,
+                                   "its lsmorph_fill record names slice %lld, past the last slice "
+                                   "across %c: the record is damaged, or not this volume's",
+                                   a.slices[k], "ijk"[a.axis])
+                        : lsm_fail(err, LSM_ERR_USAGE, NULL,
+                                   "--slices: %lld is past the last slice across %c", a.slices[k],
+                                   "ijk"[a.axis]);
     if (st == LSM_OK && a.n_slices < 2)
-      st = lsm_fail(err, LSM_ERR_USAGE, NULL, "at least two drawn slices are needed to score between");
+      st = a.recorded ? lsm_fail(err, LSM_ERR_INPUT, a.result,
+                                 "its lsmorph_fill record names fewer than two drawn slices: the "
+                                 "record is damaged; give --slices LIST and --axis")
+                      : lsm_fail(err, LSM_ERR_USAGE, NULL,
+                                 "at least two drawn slices are needed to score between");
   }
   const size_t stride[3] = {1, t ? t->n[0] : 0, t ? t->n[0] * t->n[1] : 0};
   /* the labels: given, recorded, else every value met on the scored slices */
