@@ -329,7 +329,9 @@ lsm_status lsm_labels_check_output(const char *path, const char *input, lsm_err 
         return lsm_fail(err, LSM_ERR_USAGE, path,
                         "a .nhdr name holding '%%' or a control character (a line break), which "
                         "its header's 'data file' line cannot hold: rename OUT");
-  /* a detached header's data file must not be the input's */
+  /* neither OUT nor a detached header's data file may be the input's data file */
+  if (input && lsm_labels_format_of(input) == LSM_LABELS_NRRD)
+    LSM_TRY(lsm_nrrd_labels_check_data_output(input, path, err));
   if (input && lsm_labels_ends_with(path, ".nhdr") &&
       lsm_labels_format_of(input) == LSM_LABELS_NRRD)
     for (int gz = 0; gz < 2; ++gz) {

@@ -51,8 +51,8 @@ lsm_status lsm_nrrd_labels_write(lsm_label_file *f, int fd, const char *tmp, int
                                  const char *data_tmp, const char *data_name, const char *path,
                                  lsm_err *err);
 
-/* Refuses data_out, a detached output header's data file, when it is one of
- * the data files the NRRD header input names. */
+/* Refuses data_out, an output file (OUT, or a detached header's data file),
+ * when it is one of the data files the NRRD header input names. */
 lsm_status lsm_nrrd_labels_check_data_output(const char *input, const char *data_out,
                                              lsm_err *err);
 

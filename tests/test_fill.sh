@@ -148,6 +148,13 @@ check "OUT's data file is the input's: exit 1 (got $rc)" [ $rc -eq 1 ]
 check "OUT's data file is the input's: says so (said: $(head -c 300 "$TMP/e"))" grep -q "b.raw.gz: is the input's data file" "$TMP/e"
 check "OUT's data file is the input's: the input's data unchanged" [ "$(cksum <"$TMP/pair/b.raw.gz")" = "$sum" ]
 check "OUT's data file is the input's: no header written" [ ! -e "$TMP/pair/b.nhdr" ]
+# ... and OUT itself the input's data file (a data file named like a volume)
+sed 's/^data file: .*/data file: c.nii/' "$TMP/drawn.nhdr" >"$TMP/pair/c.nhdr"
+cp "$TMP/pair/b.raw.gz" "$TMP/pair/c.nii"
+"$LSM" fill "$TMP/pair/c.nhdr" -o "$TMP/pair/c.nii" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "OUT is the input's data file: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "OUT is the input's data file: the data unchanged" [ "$(cksum <"$TMP/pair/c.nii")" = "$sum" ]
 # a pipe as LABELS or as a detached header's data file: refused, not waited on (timeout: a hang fails)
 mkfifo "$TMP/pipe.nii" "$TMP/pipe.raw"
 # ... and as OUT: refused, not replaced by a plain file
