@@ -143,7 +143,8 @@ static void lps_affine(const Nrrd *nrrd, double m[3][4]) {
 /* Calls visit on each data file a header names that exists: its lines up to
  * the first blank one are scanned for "data file: NAME" or "data file: LIST"
  * and the names after it (header-relative unless absolute), as teem reads
- * them; the format form ("NAME%03d.raw MIN MAX STEP") is left to teem. */
+ * them; "-" (standard input, where teem would wait) is refused; the format
+ * form ("NAME%03d.raw MIN MAX STEP") is left to teem. */
 typedef lsm_status (*data_file_visit)(const char *header, const char *data, const struct stat *sb,
                                       const void *ctx, lsm_err *err);
 static lsm_status each_data_file(const char *header, data_file_visit visit, const void *ctx,
@@ -176,7 +177,11 @@ static lsm_status each_data_file(const char *header, data_file_visit visit, cons
       }
       if (strchr(name, ' ')) break; /* the format form */
     }
-    if (!*name || strcmp(name, "-") == 0) continue; /* standard input, as teem reads it */
+    if (!*name) continue;
+    if (strcmp(name, "-") == 0) /* teem would wait on standard input */
+      return lsm_fail(err, LSM_ERR_INPUT, header,
+                      "its data file is '-' (standard input), which lsmorph does not read: "
+                      "name the data file");
     char path[4200];
     const int n = name[0] == '/' || !slash
                       ? snprintf(path, sizeof path, "%s", name)

@@ -165,6 +165,11 @@ check "fill -o a pipe: says so (said: $(head -c 300 "$TMP/e"))" grep -q "pipe.ni
 check "fill -o a pipe: the pipe is still there" [ -p "$TMP/pipe.nii" ]
 printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: pipe.raw\n' >"$TMP/pipe.nhdr"
 printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: LIST\n/dev/zero\n' >"$TMP/dev.nhdr"
+printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nendian: little\nencoding: raw\ndata file: -\n' >"$TMP/stdin.nhdr"
+: | timeout 30 "$LSM" fill "$TMP/stdin.nhdr" -o "$TMP/none.nii" >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "fill a .nhdr reading standard input: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "fill a .nhdr reading standard input: says so (said: $(head -c 300 "$TMP/e"))" grep -q "is '-' (standard input)" "$TMP/e"
 for f in pipe.nii pipe.nhdr dev.nhdr; do
   timeout 30 "$LSM" fill "$TMP/$f" -o "$TMP/none.nii" >"$TMP/o" 2>"$TMP/e"
   rc=$?
