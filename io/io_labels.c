@@ -392,6 +392,14 @@ lsm_status lsm_labels_write(lsm_label_file *f, const char *path, lsm_err *err) {
     LSM_TRY(lsm_labels_data_file(path, f->compressed, data_final, sizeof data_final, &name_at,
                                  err));
     snprintf(data_name, sizeof data_name, "%s", data_final + name_at);
+    /* a file of that name that the header now at path does not name is the user's */
+    struct stat sb;
+    if (lstat(data_final, &sb) == 0 &&
+        lsm_nrrd_labels_check_data_output(path, data_final, NULL) == LSM_OK)
+      return lsm_fail(err, LSM_ERR_INPUT, data_final,
+                      "exists, and %s does not name it as its data file: the result's data "
+                      "would replace it; move it away or name the output otherwise",
+                      path);
     LSM_TRY(make_temp(data_final, data_tmp, sizeof data_tmp, &data_fd, err));
   }
   lsm_status st = make_temp(path, tmp, sizeof tmp, &fd, err);

@@ -155,6 +155,15 @@ cp "$TMP/pair/b.raw.gz" "$TMP/pair/c.nii"
 rc=$?
 check "OUT is the input's data file: exit 1 (got $rc)" [ $rc -eq 1 ]
 check "OUT is the input's data file: the data unchanged" [ "$(cksum <"$TMP/pair/c.nii")" = "$sum" ]
+# a .nhdr OUT whose data file's name is taken by a file no header there names: refused, kept
+echo "the user's" >"$TMP/keep.raw"
+"$LSM" fill "$TMP/drawn2.nii" -o "$TMP/keep.nhdr" -q >"$TMP/o" 2>"$TMP/e"
+rc=$?
+check "a .nhdr OUT over another NAME.raw: exit 1 (got $rc)" [ $rc -eq 1 ]
+check "a .nhdr OUT over another NAME.raw: says so (said: $(head -c 300 "$TMP/e"))" grep -q "keep.raw: exists, and .*keep.nhdr does not name it" "$TMP/e"
+check "a .nhdr OUT over another NAME.raw: that file kept, no header" [ "$(cat "$TMP/keep.raw")" = "the user's" ] && [ ! -e "$TMP/keep.nhdr" ]
+"$LSM" fill "$TMP/drawn2.nii" -o "$TMP/again.nhdr" -q && "$LSM" fill "$TMP/drawn2.nii" -o "$TMP/again.nhdr" -q
+check "a .nhdr OUT written twice (its own data file replaced): exit 0" [ $? -eq 0 ] && [ -e "$TMP/again.raw" ]
 # a pipe as LABELS or as a detached header's data file: refused, not waited on (timeout: a hang fails)
 mkfifo "$TMP/pipe.nii" "$TMP/pipe.raw"
 # ... and as OUT: refused, not replaced by a plain file
