@@ -64,7 +64,11 @@ static lsm_status nifti_precheck(const char *path, int *version, double *vox_off
   gzFile gz = gzopen(path, "rb");
   unsigned char h[540];
   const int got = gz ? gzread(gz, h, sizeof h) : -1;
+  int zerr = Z_OK;
+  if (gz) gzerror(gz, &zerr);
   if (gz) gzclose(gz);
+  if (zerr == Z_DATA_ERROR)
+    return lsm_fail(err, LSM_ERR_INPUT, path, "cannot read: its compressed data is damaged");
   if (got < 348) return lsm_fail(err, LSM_ERR_INPUT, path, "cannot read: too short for a NIfTI header");
   const int64_t le = int_at(h, 4, 1), be = int_at(h, 4, 0);
   *version = le == 540 || be == 540 ? 2 : 1;

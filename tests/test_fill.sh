@@ -124,6 +124,9 @@ expect 1 "--labels: 9 is not in the volume" "$TMP/drawn.nii.gz" -o "$TMP/none.ni
 expect 2 "--slices: 99 is past the last slice" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --slices 0,99
 expect 2 "--dz does not apply to fill" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --dz 1
 expect 2 "unknown option '--bogus'" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --bogus
+# a .nii.gz whose compressed header is damaged: said so, not "too short for a NIfTI header"
+"$PY" -c "import sys; b = bytearray(open(sys.argv[1], 'rb').read()); b[30:60] = bytes(x ^ 0x5a for x in b[30:60]); open(sys.argv[2], 'wb').write(b)" "$TMP/drawn.nii.gz" "$TMP/damaged.nii.gz"
+expect 1 "damaged.nii.gz: cannot read: its compressed data is damaged" "$TMP/damaged.nii.gz" -o "$TMP/none.nii"
 expect 2 "--method: 'x' is not one of" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --method x
 expect 2 "--axis: 'q' is not one of i, j, k, auto" "$TMP/drawn.nii.gz" -o "$TMP/none.nii" --axis q
 expect 2 "end it in .nii" "$TMP/drawn.nii.gz" -o "$TMP/none.png"
