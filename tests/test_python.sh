@@ -69,6 +69,11 @@ for order in ("F", "C"):  # the axis named as the caller sees it, whatever the m
         report(False, "fill: one drawn slice across k (%s order) raises lsmorph.Error" % order)
     except lsmorph.Error as e:
         report("across k only slice 20" in str(e), "fill: one drawn slice, %s order: the message names k (%s)" % (order, e))
+    try:  # a bad spacing named by its axis, as the caller sees it
+        lsmorph.fill(np.asarray(drawn, order=order), spacing=(0.0, spacing[1], spacing[2]))
+        report(False, "fill: a zero spacing (%s order) raises lsmorph.Error" % order)
+    except lsmorph.Error as e:
+        report("spacing 0 along i is not a length" in str(e), "fill: a zero spacing, %s order: the message names i (%s)" % (order, e))
 for bad, kind in ((drawn.astype(np.float32), TypeError), (drawn[0], ValueError)):
     try:
         lsmorph.fill(bad)

@@ -132,8 +132,8 @@ int lsmorph_fill(void *labels, lsmorph_dtype dtype, const size_t n[3], const dou
                   {spacing[0], spacing[1], spacing[2]}};
   for (int a = 0; a < 3; ++a)
     if (!(spacing[a] > 0.0) || !isfinite(spacing[a]))
-      return finish(lsm_fail(&err, LSM_ERR_USAGE, NULL, "fill: spacing %g along axis %d is not "
-                             "a length", spacing[a], a), &err, message, message_size);
+      return finish(lsm_fail(&err, LSM_ERR_USAGE, NULL, "fill: spacing %g along %c is not a "
+                             "length", spacing[a], "ijk"[a]), &err, message, message_size);
   lsm_fill_opts o;
   lsm_fill_opts_default(&o);
   o.axis = axis;
