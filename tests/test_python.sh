@@ -74,12 +74,12 @@ for order in ("F", "C"):  # the axis named as the caller sees it, whatever the m
         report(False, "fill: a zero spacing (%s order) raises lsmorph.Error" % order)
     except lsmorph.Error as e:
         report("spacing 0 along i is not a length" in str(e), "fill: a zero spacing, %s order: the message names i (%s)" % (order, e))
-for bad, kind in ((drawn.astype(np.float32), TypeError), (drawn[0], ValueError)):
+for bad, kind in ((drawn.astype(np.float32), TypeError), (drawn[0], ValueError), (drawn[:0], ValueError)):
     try:
         lsmorph.fill(bad)
         report(False, "fill: %s raised" % kind.__name__)
     except kind:
-        report(True, "fill: %s raised for %s" % (kind.__name__, "floats" if bad.ndim == 3 else "2D"))
+        report(True, "fill: %s raised for %s" % (kind.__name__, "2D" if bad.ndim != 3 else "no voxels" if not bad.size else "floats"))
 try:
     lsmorph.fill(drawn, colour="red")
     report(False, "fill: an unknown option raises TypeError")

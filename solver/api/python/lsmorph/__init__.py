@@ -141,6 +141,8 @@ def fill(labels, spacing=(1.0, 1.0, 1.0), axis=None, slices=None, fill_labels=No
     a = np.asarray(labels)
     if a.ndim != 3:
         raise ValueError("lsmorph.fill: labels must be 3D, not %dD" % a.ndim)
+    if a.size == 0:
+        raise ValueError("lsmorph.fill: labels has no voxels (shape %s)" % (a.shape,))
     if a.dtype.kind not in "iu":
         raise TypeError("lsmorph.fill: labels must be integers, not %s (labels stored as "
                         "floats: labels.astype(int) after checking they are whole)" % a.dtype)
