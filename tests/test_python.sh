@@ -101,6 +101,15 @@ raw = open(os.path.join(d, "rec", "volume.nrrd"), "rb").read()
 vol = np.frombuffer(raw[512:], "<f4").reshape(phi.shape)
 report(phi.shape == (9, 40, 50) and np.array_equal(phi, vol) and np.allclose(z, np.arange(9.0)),
        "reconstruct: the signed distances of lsmorph reconstruct (%d slices)" % phi.shape[0])
+wide, _ = lsmorph.reconstruct(masks.astype(np.uint16) * 256, spacing=4, pixel_size=(0.5, 0.75), dz=1)
+report(np.array_equal(wide, phi), "reconstruct: masks of 0 and 256 (uint16) are the same masks")
+for kw, kind, says in ((dict(dz=0), ValueError, "dz must be a positive length"),
+                       (dict(pixel_size=(float("nan"), 1)), lsmorph.Error, "pixel size nan x 1")):
+    try:
+        lsmorph.reconstruct(masks, **kw)
+        report(False, "reconstruct %s raises %s" % (kw, kind.__name__))
+    except kind as e:
+        report(says in str(e), "reconstruct %s raises %s (%s)" % (kw, kind.__name__, e))
 PYEOF
 
 # make install into a temporary prefix: pkg-config, the shared and the static library, the package

@@ -206,6 +206,15 @@ int lsmorph_reconstruct(const uint8_t *masks, size_t count, size_t width, size_t
                            "reconstruct: at least two masks of 1 .. 2^24 pixels a side, their "
                            "heights and an output are needed"),
                   &err, message, message_size);
+  if (!(dx > 0.0) || !isfinite(dx) || !(dy > 0.0) || !isfinite(dy))
+    return finish(lsm_fail(&err, LSM_ERR_USAGE, NULL,
+                           "reconstruct: the pixel size %g x %g is not two lengths", dx, dy),
+                  &err, message, message_size);
+  if (!(dz >= 0.0) || !isfinite(dz))
+    return finish(lsm_fail(&err, LSM_ERR_USAGE, NULL,
+                           "reconstruct: the output spacing dz %g is not a length (0: the "
+                           "smaller pixel side)", dz),
+                  &err, message, message_size);
   lsm_stack_opts so;
   int ends_given = 0, threads = 0;
   const char *kind = "c";

@@ -201,7 +201,7 @@ def reconstruct(masks, heights=None, spacing=1.0, pixel_size=(1.0, 1.0), dz=None
     dz           the output spacing; None: the smaller pixel side
     options      as for ``fill`` (``ends`` default "auto")
     """
-    m = np.ascontiguousarray(masks, dtype=np.uint8)
+    m = np.ascontiguousarray(np.asarray(masks) != 0, dtype=np.uint8)  # non-zero: inside
     if m.ndim != 3 or m.shape[0] < 2:
         raise ValueError("lsmorph.reconstruct: masks must be a stack of at least two 2D slices")
     z = np.ascontiguousarray(np.arange(m.shape[0]) * float(spacing) if heights is None else heights,
@@ -210,6 +210,8 @@ def reconstruct(masks, heights=None, spacing=1.0, pixel_size=(1.0, 1.0), dz=None
         raise ValueError("lsmorph.reconstruct: one height per mask")
     px = pixel_size if np.ndim(pixel_size) else (pixel_size, pixel_size)
     step = float(dz) if dz is not None else min(float(px[0]), float(px[1]))
+    if dz is not None and not (step > 0.0 and np.isfinite(step)):
+        raise ValueError("lsmorph.reconstruct: dz must be a positive length, not %r" % (dz,))
     zp = z.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
     count = _lib.lsmorph_reconstruct_count(zp, z.size, step)
     out = np.empty((count, m.shape[1], m.shape[2]), np.float32)
