@@ -210,9 +210,9 @@ int lsmorph_reconstruct(const uint8_t *masks, size_t count, size_t width, size_t
     return finish(lsm_fail(&err, LSM_ERR_USAGE, NULL,
                            "reconstruct: the pixel size %g x %g is not two lengths", dx, dy),
                   &err, message, message_size);
-  if (!(dz >= 0.0) || !isfinite(dz))
+  if (!isfinite(dz))
     return finish(lsm_fail(&err, LSM_ERR_USAGE, NULL,
-                           "reconstruct: the output spacing dz %g is not a length (0: the "
+                           "reconstruct: the output spacing dz %g is not a number (<= 0: the "
                            "smaller pixel side)", dz),
                   &err, message, message_size);
   lsm_stack_opts so;
