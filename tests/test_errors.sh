@@ -300,9 +300,11 @@ else
 fi
 
 # ---- score ----------------------------------------------------------------------------------------------
-expect "score: no truth slices" 1 "empty: 0 slice images: --stride 2 needs at least 3" - score empty ref --stride 2
-expect "score: nothing held out" 1 "good: 3 slice images: --stride 3 needs at least 4" - score good ref --stride 3
-expect "score: missing result" 1 "nothing/slices: no such folder" - score good nothing --stride 2
+expect "score: no truth slices" 1 "empty: 0 slice images: --stride 2 needs at least 3" - score empty good --stride 2
+expect "score: nothing held out" 1 "good: 3 slice images: --stride 3 needs at least 4" - score good good --stride 3
+expect "score: missing result" 1 "nothing: no such folder" - score good nothing --stride 2
+expect "score: missing result, no --stride" 1 "nothing: no such folder" - score good nothing
+expect "score: a file as the result" 1 "good/1.png: not a folder" - score good good/1.png
 expect "score: a result without slices/ (--no-slices)" 1 "empty/slices: no such folder: score reads the result's slices (a reconstruct run with --no-slices has none)" - score good empty --stride 2
 expect "score: bad --stride" 2 "--stride: 1 is out of range" - score good ref --stride 1
 # a result scored with another stride than it was made with, or against another stack

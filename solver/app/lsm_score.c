@@ -109,6 +109,20 @@ static lsm_status result_input_positions(const char *text, const char *path, siz
   return LSM_OK;
 }
 
+/* OUT_DIR must be a folder before its run.json is looked for: a missing one
+ * is not a result without run.json (that asks for --stride). */
+static lsm_status check_result_dir(const char *dir, lsm_err *err) {
+  struct stat info;
+  if (stat(dir, &info) != 0)
+    return errno == ENOENT ? lsm_fail(err, LSM_ERR_INPUT, dir, "no such folder")
+                           : lsm_fail(err, LSM_ERR_INPUT, dir, "cannot access folder: %s",
+                                      strerror(errno));
+  if (!S_ISDIR(info.st_mode))
+    return lsm_fail(err, LSM_ERR_INPUT, dir,
+                    "not a folder (score TRUTH_DIR OUT_DIR: OUT_DIR is reconstruct's output folder)");
+  return LSM_OK;
+}
+
 /* Whether dir holds a run.json (a result folder given where the truth goes). */
 static int is_dir_with_run_json(const char *dir) {
   char path[4200];
@@ -180,6 +194,7 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
   const size_t k = (size_t)cli->stride;
   size_t first = cli->first > 0 ? (size_t)cli->first - 1 : 0;
   char path[4200], *text = NULL;
+  LSM_TRY(check_result_dir(cli->result_dir, err));
   LSM_TRY(read_run_json(cli->result_dir, path, &text, err));
   lsm_status st = LSM_OK;
   size_t *offsets = NULL, n_offsets = 0; /* the inputs' truth slices less the first's */
