@@ -85,6 +85,7 @@ for kind in text zero truncated no_iend bad_crc bad_idat_crc bad_zlib text_liar 
   png gray8 "b-$kind/1.png" 32 5
   png "$kind" "b-$kind/2.png" 32
 done
+png gray8 dim/1.png 32 5 && png label01 dim/2.png 32 7 && png gray8 dim/3.png 32 5 # a 0/1 mask among 0/255
 png gray8 sizes/1.png 32 5 && png gray8 sizes/2.png 32 7 && png gray8 sizes/3.png 40
 png huge huge/1.png && png huge huge/2.png
 png huge_idat huge2/1.png && png huge_idat huge2/2.png
@@ -297,6 +298,14 @@ if [ $? -eq 0 ] && grep -q "note: good: --input outline, but 1.png looks filled"
   ok
 else
   bad "filled slices as outlines: no note ($(cat "$TMP/stderr"))"
+fi
+
+# a 0/1 mask among 0/255 ones reads as blank: a note says it is not black
+"$LSM" reconstruct dim -o out-dim --no-preview >/dev/null 2>"$TMP/stderr"
+if [ $? -eq 0 ] && grep -q "note: dim: 2.png read as blank (the object absent), yet .* non-zero" "$TMP/stderr"; then
+  ok
+else
+  bad "a 0/1 slice among 0/255 ones: no note ($(cat "$TMP/stderr"))"
 fi
 
 # ---- score ----------------------------------------------------------------------------------------------

@@ -236,8 +236,33 @@ void lsm_slice_files_free(lsm_slice_files *src) {
   src->count = 0;
 }
 
+/* A note on the first slice read as blank that holds zero and non-zero
+ * pixels, all below 50 %, while other slices reach it (a 0/1 mask among
+ * 0/255 ones): the object vanishes there although the slice draws it. */
+static void note_dim_blank(const lsm_slice_files *src, const char *dir) {
+  lsm_image_read_opts any = src->read;
+  any.nonzero = 1;
+  for (size_t k = 0; k < src->count; ++k) {
+    if (src->blank[k] != 1) continue;
+    lsm_mask m = {0, 0, NULL};
+    lsm_err ignored;
+    lsm_err_clear(&ignored);
+    if (lsm_slice_read_mask(src->paths[k], &any, &m, &ignored) != LSM_OK) return;
+    const size_t nonzero = lsm_mask_count(&m), all = (size_t)m.width * (size_t)m.height;
+    lsm_mask_free(&m);
+    if (!nonzero || nonzero == all) continue; /* black, or a uniform dim background */
+    fprintf(stderr,
+            "lsmorph: note: %s: %s read as blank (the object absent), yet %zu of its pixels are "
+            "non-zero, all below 50 %% luminance, while other slices reach it: a mask stored as "
+            "0/1 among 0/255 ones? Save every slice with the same values\n",
+            dir, lsm_base_name(src->paths[k]), nonzero);
+    return;
+  }
+}
+
 void lsm_inputs_note_blank(const lsm_slice_files *src, const char *dir) {
   if (!src->blank) return;
+  if (!src->read.nonzero && !src->read.invert) note_dim_blank(src, dir);
   size_t first = SIZE_MAX, last = 0, between = 0, example = 0;
   for (size_t k = 0; k < src->count; ++k)
     if (src->blank[k] == 2) {
