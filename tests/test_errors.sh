@@ -85,6 +85,7 @@ for kind in text zero truncated no_iend bad_crc bad_idat_crc bad_zlib text_liar 
   png gray8 "b-$kind/1.png" 32 5
   png "$kind" "b-$kind/2.png" 32
 done
+png gray8 big18/123456789012345678.png 32 5 && png gray8 big18/123456789012345679.png 32 7
 png gray8 dim/1.png 32 5 && png label01 dim/2.png 32 7 && png gray8 dim/3.png 32 5 # a 0/1 mask among 0/255
 png gray8 sizes/1.png 32 5 && png gray8 sizes/2.png 32 7 && png gray8 sizes/3.png 40
 png huge huge/1.png && png huge huge/2.png
@@ -299,6 +300,11 @@ if [ $? -eq 0 ] && grep -q "note: good: --input outline, but 1.png looks filled"
 else
   bad "filled slices as outlines: no note ($(cat "$TMP/stderr"))"
 fi
+
+# names numbered past 2^53: increasing, but one height in double precision
+expect "--heights-from-names: numbers that round together" 1 \
+  "big18/123456789012345679.png: --heights-from-names: its number 123456789012345679 gives the same height as 123456789012345678.png's" \
+  out reconstruct big18 -o out --heights-from-names -q
 
 # a 0/1 mask among 0/255 ones reads as blank: a note says it is not black
 "$LSM" reconstruct dim -o out-dim --no-preview >/dev/null 2>"$TMP/stderr"

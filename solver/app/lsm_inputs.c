@@ -156,8 +156,16 @@ lsm_status lsm_input_heights(const lsm_cli *cli, char *const *paths, size_t coun
                       " (the numbers must increase in the files' natural order)",
                       n, lsm_base_name(paths[k - 1]), previous);
     }
-    previous = n;
     z[k] = (double)n * cli->spacing;
+    if (k > 0 && !(z[k] > z[k - 1])) { /* numbers past 2^53 round together */
+      free(z);
+      return lsm_fail(err, LSM_ERR_INPUT, paths[k],
+                      "--heights-from-names: its number %" PRIu64 " gives the same height as "
+                      "%s's %" PRIu64 " in double precision (numbers above 2^53 round): "
+                      "number the slices from a smaller start",
+                      n, lsm_base_name(paths[k - 1]), previous);
+    }
+    previous = n;
   }
   *z_out = z;
   return LSM_OK;
