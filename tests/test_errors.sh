@@ -306,6 +306,13 @@ expect "--heights-from-names: numbers that round together" 1 \
   "big18/123456789012345679.png: --heights-from-names: its number 123456789012345679 gives the same height as 123456789012345678.png's" \
   out reconstruct big18 -o out --heights-from-names -q
 
+# --spacing beside --heights places nothing: a note says so
+printf '0\n2\n5\n' >good-z.txt
+"$LSM" reconstruct good -o out-z --heights good-z.txt --spacing 3 --no-preview >/dev/null 2>"$TMP/stderr"
+if [ $? -eq 0 ] && grep -q "note: --spacing has no effect with --heights" "$TMP/stderr"; then ok; else
+  bad "--heights with --spacing: no note ($(cat "$TMP/stderr"))"
+fi
+
 # a 0/1 mask among 0/255 ones reads as blank: a note says it is not black
 "$LSM" reconstruct dim -o out-dim --no-preview >/dev/null 2>"$TMP/stderr"
 if [ $? -eq 0 ] && grep -q "note: dim: 2.png read as blank (the object absent), yet .* non-zero" "$TMP/stderr"; then

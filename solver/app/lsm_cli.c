@@ -703,6 +703,9 @@ void lsm_cli_note_unused(const lsm_cli *cli, FILE *f) {
   if (!cli->stack.per_iteration && cli->tol_given)
     fprintf(f, "lsmorph: note: --tol has no effect without --per-iteration (it stops "
                "each pair of that mode)\n");
+  if (cli->heights_file && cli->spacing_given)
+    fprintf(f, "lsmorph: note: --spacing has no effect with --heights (the file gives "
+               "every slice's height)\n");
   if (strcmp(cli->backend, "c") == 0 && cli->device_given)
     fprintf(f, "lsmorph: note: --device has no effect with --backend c\n");
   if (cli->nrrd_encoding_given && !(cli->formats & LSM_FORMAT_NRRD))
