@@ -6,8 +6,8 @@
  * lsm_mask_row_from_samples as a PNG row would (16-bit samples put big
  * endian first), so a 16-bit label mask stored as 0/1 keeps its values.
  * Every other layout libtiff can decode (palette, YCbCr, CMYK, separate
- * planes, 2 or 4 bits, other orientations) is read through its RGBA
- * interface, stopping at the first bad strip or tile: 8 bits a sample,
+ * planes, 2 or 4 bits, the orientations that flip rows or columns) is read
+ * through its RGBA interface, stopping at the first bad strip or tile: 8 bits a sample,
  * alpha premultiplied, so the colour is already composited over black and
  * the alpha is dropped.
  *
@@ -138,7 +138,8 @@ static lsm_status tiff_damage(const tiff_messages *msgs, const char *name, lsm_e
   return lsm_fail(err, LSM_ERR_INPUT, name, "corrupt TIFF: %s", msgs->first);
 }
 
-/* Size and page count; refuses several pages and images over max_pixels. */
+/* Size and page count; refuses several pages, images over max_pixels and
+ * orientations that swap rows and columns. */
 static lsm_status tiff_size(TIFF *tif, const char *path, uint64_t max_pixels, uint32_t *w,
                             uint32_t *h, lsm_err *err) {
   *w = *h = 0;
@@ -158,6 +159,15 @@ static lsm_status tiff_size(TIFF *tif, const char *path, uint64_t max_pixels, ui
     return lsm_fail(err, LSM_ERR_INPUT, path,
                     "TIFF with several pages: give one slice a file (tiffsplit from "
                     "libtiff-tools splits a stack)");
+  /* libtiff's RGBA reader flips rows and columns but does not transpose: 5 to
+   * 8 would come back with width and height swapped */
+  uint16_t orientation = ORIENTATION_TOPLEFT;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_ORIENTATION, &orientation);
+  if (orientation < ORIENTATION_TOPLEFT || orientation > ORIENTATION_BOTLEFT)
+    return lsm_fail(err, LSM_ERR_UNSUPPORTED, path,
+                    "TIFF orientation %u (rows stored as columns: rotated or transposed) is not "
+                    "read: save the mask as it is displayed, top-left",
+                    (unsigned)orientation);
   return LSM_OK;
 }
 

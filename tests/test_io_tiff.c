@@ -2,7 +2,8 @@
  * every layout lsmorph accepts (8-bit gray, MINISWHITE at 8 and 1 bit, 16-bit
  * labels, RGB, gray+alpha, palettes; strips and 16 x 16 tiles; LZW, CCITT G4,
  * Deflate, PackBits) reads back as the same mask; the pixel limit; several
- * pages, floating point and 16-bit separate planes refused with clear errors;
+ * pages, floating point, 16-bit separate planes and orientations 5 to 8 (rows
+ * stored as columns) refused with clear errors;
  * garbage and truncated files are errors naming the file; and .tif/.tiff
  * names are recognised. */
 #include "tests/lsm_test_io.h"
@@ -23,6 +24,7 @@ typedef struct test_tiff {
   int tiled;        /* 16 x 16 tiles */
   int pages;        /* 1, or 2 for a stack */
   uint32_t (*sample)(int x, int y, int c);
+  uint16_t orientation; /* 0: not written (top-left) */
 } test_tiff;
 
 /* The shape: a disc-like blob left of x = 12, plus the top-right corner. */
@@ -49,6 +51,7 @@ static void write_test_tiff(const char *path, const test_tiff *t) {
     TIFFSetField(tif, TIFFTAG_PLANARCONFIG, t->planar ? t->planar : PLANARCONFIG_CONTIG);
     TIFFSetField(tif, TIFFTAG_COMPRESSION, t->compression ? t->compression : COMPRESSION_NONE);
     TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, t->format ? t->format : SAMPLEFORMAT_UINT);
+    if (t->orientation) TIFFSetField(tif, TIFFTAG_ORIENTATION, t->orientation);
     if (t->extra) {
       uint16_t types[1] = {t->extra};
       TIFFSetField(tif, TIFFTAG_EXTRASAMPLES, 1, types);
@@ -146,19 +149,19 @@ static void test_tiff_layouts(void **state) {
     test_tiff t;
     int nonzero;
   } good[] = {
-      {"gray8-lzw.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, COMPRESSION_LZW, 0, 0, 0, 1, gray8}, 0},
-      {"white-zero8.tif", {8, 1, PHOTOMETRIC_MINISWHITE, 0, 0, 0, 0, 0, 1, white_zero8}, 0},
-      {"bilevel.TIFF", {1, 1, PHOTOMETRIC_MINISWHITE, 0, COMPRESSION_CCITTFAX4, 0, 0, 0, 1, white_zero1}, 0},
-      {"labels16.tif", {16, 1, PHOTOMETRIC_MINISBLACK, 0, COMPRESSION_ADOBE_DEFLATE, 0, 0, 0, 1, label16}, 1},
-      {"rgb8.tif", {8, 3, PHOTOMETRIC_RGB, 0, COMPRESSION_PACKBITS, 0, 0, 0, 1, rgb8}, 0},
-      {"gray-alpha8.tif", {8, 2, PHOTOMETRIC_MINISBLACK, 0, 0, 0, EXTRASAMPLE_UNASSALPHA, 0, 1, gray_alpha8}, 0},
-      {"palette8.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, 0, 0, 0, 0, 1, index8}, 0},
-      {"tiled8.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 1, 1, gray8}, 0},
-      {"tiled-rgb8.tif", {8, 3, PHOTOMETRIC_RGB, 0, 0, 0, 0, 1, 1, rgb8}, 0},
-      {"tiled16.tif", {16, 1, PHOTOMETRIC_MINISBLACK, 0, COMPRESSION_LZW, 0, 0, 1, 1, label16}, 1},
-      {"tiled-bilevel.tif", {1, 1, PHOTOMETRIC_MINISWHITE, 0, COMPRESSION_CCITTFAX4, 0, 0, 1, 1, white_zero1}, 0},
-      {"tiled-palette8.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, COMPRESSION_LZW, 0, 0, 1, 1, index8}, 0},
-      {"tiled-palette8-raw.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, 0, 0, 0, 1, 1, index8}, 0},
+      {"gray8-lzw.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, COMPRESSION_LZW, 0, 0, 0, 1, gray8, 0}, 0},
+      {"white-zero8.tif", {8, 1, PHOTOMETRIC_MINISWHITE, 0, 0, 0, 0, 0, 1, white_zero8, 0}, 0},
+      {"bilevel.TIFF", {1, 1, PHOTOMETRIC_MINISWHITE, 0, COMPRESSION_CCITTFAX4, 0, 0, 0, 1, white_zero1, 0}, 0},
+      {"labels16.tif", {16, 1, PHOTOMETRIC_MINISBLACK, 0, COMPRESSION_ADOBE_DEFLATE, 0, 0, 0, 1, label16, 0}, 1},
+      {"rgb8.tif", {8, 3, PHOTOMETRIC_RGB, 0, COMPRESSION_PACKBITS, 0, 0, 0, 1, rgb8, 0}, 0},
+      {"gray-alpha8.tif", {8, 2, PHOTOMETRIC_MINISBLACK, 0, 0, 0, EXTRASAMPLE_UNASSALPHA, 0, 1, gray_alpha8, 0}, 0},
+      {"palette8.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, 0, 0, 0, 0, 1, index8, 0}, 0},
+      {"tiled8.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 1, 1, gray8, 0}, 0},
+      {"tiled-rgb8.tif", {8, 3, PHOTOMETRIC_RGB, 0, 0, 0, 0, 1, 1, rgb8, 0}, 0},
+      {"tiled16.tif", {16, 1, PHOTOMETRIC_MINISBLACK, 0, COMPRESSION_LZW, 0, 0, 1, 1, label16, 0}, 1},
+      {"tiled-bilevel.tif", {1, 1, PHOTOMETRIC_MINISWHITE, 0, COMPRESSION_CCITTFAX4, 0, 0, 1, 1, white_zero1, 0}, 0},
+      {"tiled-palette8.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, COMPRESSION_LZW, 0, 0, 1, 1, index8, 0}, 0},
+      {"tiled-palette8-raw.tif", {8, 1, PHOTOMETRIC_PALETTE, 0, 0, 0, 0, 1, 1, index8, 0}, 0},
   };
   for (size_t k = 0; k < sizeof good / sizeof good[0]; ++k)
     if (read_test_tiff(f->dir, good[k].name, &good[k].t, good[k].nonzero, &err) != LSM_OK)
@@ -187,15 +190,21 @@ static void test_tiff_layouts(void **state) {
     lsm_status want;
     const char *msg;
   } bad[] = {
-      {"stack.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 0, 2, gray8}, LSM_ERR_INPUT, "several pages"},
-      {"float.tif", {32, 1, PHOTOMETRIC_MINISBLACK, 0, 0, SAMPLEFORMAT_IEEEFP, 0, 0, 1, gray8}, LSM_ERR_UNSUPPORTED, "floating point"},
-      {"planes16.tif", {16, 2, PHOTOMETRIC_MINISBLACK, PLANARCONFIG_SEPARATE, 0, 0, EXTRASAMPLE_UNASSALPHA, 0, 1, label16}, LSM_ERR_UNSUPPORTED, "16-bit TIFF in separate planes"},
+      {"stack.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 0, 2, gray8, 0}, LSM_ERR_INPUT, "several pages"},
+      {"float.tif", {32, 1, PHOTOMETRIC_MINISBLACK, 0, 0, SAMPLEFORMAT_IEEEFP, 0, 0, 1, gray8, 0}, LSM_ERR_UNSUPPORTED, "floating point"},
+      {"planes16.tif", {16, 2, PHOTOMETRIC_MINISBLACK, PLANARCONFIG_SEPARATE, 0, 0, EXTRASAMPLE_UNASSALPHA, 0, 1, label16, 0}, LSM_ERR_UNSUPPORTED, "16-bit TIFF in separate planes"},
+      /* rows stored as columns: libtiff's RGBA reader would swap width and height */
+      {"lefttop.tif", {8, 1, PHOTOMETRIC_MINISBLACK, 0, 0, 0, 0, 0, 1, gray8, ORIENTATION_LEFTTOP}, LSM_ERR_UNSUPPORTED, "TIFF orientation 5 (rows stored as columns"},
+      {"rightbot.tif", {8, 3, PHOTOMETRIC_RGB, 0, 0, 0, 0, 1, 1, rgb8, ORIENTATION_RIGHTBOT}, LSM_ERR_UNSUPPORTED, "TIFF orientation 7 (rows stored as columns"},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
     const lsm_status st = read_test_tiff(f->dir, bad[k].name, &bad[k].t, 0, &err);
     if (st != bad[k].want) fail_msg("%s: status %d (%s)", bad[k].name, (int)st, err.msg);
     assert_msg_contains(err, bad[k].msg);
   }
+  join(path, sizeof path, f->dir, "lefttop.tif"); /* refused from the header too */
+  lsm_err_clear(&err);
+  assert_int_equal(lsm_slice_read_header(path, 0, &w, &h, &err), LSM_ERR_UNSUPPORTED);
   /* not a TIFF at all, and a truncated one: errors with the file's name */
   join(path, sizeof path, f->dir, "garbage.tif");
   write_bytes(path, "II*\0garbage", 11);
