@@ -71,6 +71,7 @@ typedef struct json_reader {
   int want_array;   /* seeking an array (of numbers, or of strings), not one number */
   int want_strings; /* ... of strings */
   int want_string;  /* one string, not one number: its bytes in spans[0], span_lengths[0] */
+  int want_bool;    /* true or false, not one number: value 1 or 0 */
   double *items;    /* its numbers (up to capacity), counted in n_items */
   const char **spans; /* or its strings: bytes between the quotes, escapes unresolved */
   size_t *span_lengths;
@@ -192,6 +193,9 @@ static int json_read_value(json_reader *r, int level, int on_path) {
             r->spans[0] = value + 1;
             r->span_lengths[0] = (size_t)(r->p - value) - 2;
           }
+        } else if (r->want_bool) {
+          r->found = *value == 't' || *value == 'f';
+          r->value = *value == 't';
         } else if (number) {
           r->found = 1; /* the number sought, read by the grammar above */
           r->value = strtod(value, NULL);
@@ -354,4 +358,12 @@ size_t lsm_json_unescape(const char *raw, size_t length, char *out) {
   }
   out[n] = '\0';
   return n;
+}
+
+int lsm_json_find_bool(const char *text, const char *const *keys, int count, int *value,
+                       size_t *error_at) {
+  json_reader r = {.p = text, .keys = keys, .count = count, .want_bool = 1};
+  if (!json_read_document(&r, text, error_at)) return -1;
+  if (r.found && value) *value = r.value != 0.0;
+  return r.found;
 }

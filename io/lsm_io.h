@@ -357,6 +357,10 @@ int lsm_json_find_strings(const char *text, const char *const *keys, int count, 
 int lsm_json_find_string(const char *text, const char *const *keys, int count, const char **raw,
                          size_t *raw_length, size_t *error_at);
 
+/* The same for true or false (run.json's options.invert): *value 1 or 0. */
+int lsm_json_find_bool(const char *text, const char *const *keys, int count, int *value,
+                       size_t *error_at);
+
 /* Resolves the escapes of a JSON string's raw bytes (length of them) into
  * out, which must hold length + 1 bytes (nothing grows); NUL-terminated.  As
  * lsm_json_string writes file names, \u0001 to \u00ff are the bytes of those

@@ -341,6 +341,13 @@ expect "score: stride 4 on a stride-2 result" 1 \
   "r2: was made from 5 slices (run.json), but --stride 4 keeps 3 of the 9 truth slices" - score tall r2 --stride 4
 expect "score: stride 2 on a stride-4 result" 1 \
   "r4: was made from 3 slices (run.json), but --stride 2 keeps 5 of the 9 truth slices" - score tall r4 --stride 2
+# a result made with --invert: its truth is dark inside too, read so (run.json's options.invert)
+"$LSM" reconstruct tall4 -o r4-inv --spacing 4 --invert -q --no-preview >/dev/null 2>"$TMP/stderr" &&
+  "$LSM" score tall r4-inv --stride 4 >"$TMP/stdout" 2>>"$TMP/stderr" &&
+  "$LSM" score tall r4-inv >>"$TMP/stdout" 2>>"$TMP/stderr"
+if [ $? -eq 0 ] && [ "$(grep -c '"held_out": 6' "$TMP/stdout")" -eq 2 ]; then ok; else
+  bad "score of an --invert result: $(cat "$TMP/stderr")"
+fi
 cp -r r4 r4-bare && rm r4-bare/run.json # without run.json the inputs still tell
 expect "score: stride 2 on a stride-4 result without run.json" 1 \
   "r4-bare/slices/00003.png: differs from the truth slice tall/3.png, which --stride 2 makes an input" - \

@@ -47,6 +47,14 @@ static double result_row_step(const char *text) {
   return 1.0;
 }
 
+/* Whether a result was made with --invert (options.invert of its run.json):
+ * its truth is then dark inside, read as reconstruct read the inputs. */
+static int result_inverted(const char *text) {
+  static const char *const keys[] = {"options", "invert"};
+  int invert = 0;
+  return text && lsm_json_find_bool(text, keys, 2, &invert, NULL) == 1 && invert;
+}
+
 /* The number of input slices a result was made from (input.slices of its
  * run.json, valid JSON); a run.json that does not say is an error. */
 static lsm_status result_input_count(const char *text, const char *path, size_t *count,
@@ -187,10 +195,11 @@ static int first_by_names(const char *text, char **truth, size_t n_truth, const 
  * else the first truth slice.  *inputs: run.json's input count with
  * --stride, 0 without a run.json; from: " from slice N" where the inputs do
  * not start at the first truth slice; *row_step: the unit of the distances
- * (result_row_step), from the same run.json. */
+ * (result_row_step), *invert: whether it was made with --invert, both from
+ * the same run.json. */
 static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, char from[64],
                              size_t **kept, size_t *n_kept, size_t *inputs, double *row_step,
-                             lsm_err *err) {
+                             int *invert, lsm_err *err) {
   const size_t k = (size_t)cli->stride;
   size_t first = cli->first > 0 ? (size_t)cli->first - 1 : 0;
   char path[4200], *text = NULL;
@@ -222,6 +231,7 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
   if (st == LSM_OK && cli->first == 0 && text)
     named = first_by_names(text, truth, n_truth, offsets, n_offsets, &first);
   *row_step = result_row_step(text);
+  *invert = result_inverted(text);
   free(text);
   if (first > 0) snprintf(from, 64, " from slice %zu", first + 1);
   if (st == LSM_OK && named && first > 0) {
@@ -422,8 +432,11 @@ lsm_status lsm_score(const lsm_cli *cli, lsm_err *err) {
   size_t inputs = 0; /* run.json's input count, with --stride */
   char from[64] = ""; /* where --stride starts, when not at the first slice */
   double row_step = 1.0; /* pixel height / width: distances are in pixel widths */
-  lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, &row_step, err);
+  int invert = 0;        /* made with --invert: the truth is dark inside */
+  lsm_status st =
+      score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, &row_step, &invert, err);
   lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
+  ro_truth.invert = invert;
   score_sums sums;
   memset(&sums, 0, sizeof sums);
   const size_t first = n_kept ? kept[0] : 0, last = n_kept ? kept[n_kept - 1] : 0;
