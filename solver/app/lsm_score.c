@@ -10,6 +10,7 @@
 #include "io/lsm_io.h"
 #include "solver/app/lsm_inputs.h"
 #include "solver/app/lsm_metrics.h"
+#include "solver/sdf/lsm_sdf.h"
 
 /* A result's run.json, read whole into *text (NUL-terminated), its path in
  * path; *text is NULL when there is none (slices written by another tool,
@@ -53,6 +54,16 @@ static int result_inverted(const char *text) {
   static const char *const keys[] = {"options", "invert"};
   int invert = 0;
   return text && lsm_json_find_bool(text, keys, 2, &invert, NULL) == 1 && invert;
+}
+
+/* Whether a result was made from outlines (options.input "outline"): its
+ * truth slices are then outlines too, filled by parity as its inputs were. */
+static int result_from_outlines(const char *text) {
+  static const char *const keys[] = {"options", "input"};
+  const char *raw = NULL;
+  size_t len = 0;
+  return text && lsm_json_find_string(text, keys, 2, &raw, &len, NULL) == 1 && len == 7 &&
+         memcmp(raw, "outline", 7) == 0;
 }
 
 /* The number of input slices a result was made from (input.slices of its
@@ -195,11 +206,11 @@ static int first_by_names(const char *text, char **truth, size_t n_truth, const 
  * else the first truth slice.  *inputs: run.json's input count with
  * --stride, 0 without a run.json; from: " from slice N" where the inputs do
  * not start at the first truth slice; *row_step: the unit of the distances
- * (result_row_step), *invert: whether it was made with --invert, both from
- * the same run.json. */
+ * (result_row_step), *invert and *outlines: whether it was made with --invert,
+ * from outlines, all from the same run.json. */
 static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, char from[64],
                              size_t **kept, size_t *n_kept, size_t *inputs, double *row_step,
-                             int *invert, lsm_err *err) {
+                             int *invert, int *outlines, lsm_err *err) {
   const size_t k = (size_t)cli->stride;
   size_t first = cli->first > 0 ? (size_t)cli->first - 1 : 0;
   char path[4200], *text = NULL;
@@ -232,6 +243,7 @@ static lsm_status score_kept(const lsm_cli *cli, char **truth, size_t n_truth, c
     named = first_by_names(text, truth, n_truth, offsets, n_offsets, &first);
   *row_step = result_row_step(text);
   *invert = result_inverted(text);
+  *outlines = result_from_outlines(text);
   free(text);
   if (first > 0) snprintf(from, 64, " from slice %zu", first + 1);
   if (st == LSM_OK && named && first > 0) {
@@ -433,8 +445,9 @@ lsm_status lsm_score(const lsm_cli *cli, lsm_err *err) {
   char from[64] = ""; /* where --stride starts, when not at the first slice */
   double row_step = 1.0; /* pixel height / width: distances are in pixel widths */
   int invert = 0;        /* made with --invert: the truth is dark inside */
-  lsm_status st =
-      score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, &row_step, &invert, err);
+  int outlines = 0;      /* made from outlines: so is the truth */
+  lsm_status st = score_kept(cli, truth, n, from, &kept, &n_kept, &inputs, &row_step, &invert,
+                             &outlines, err);
   lsm_image_read_opts ro = {0, (uint64_t)1 << 28, 0}, ro_truth = ro;
   ro_truth.invert = invert;
   score_sums sums;
@@ -462,6 +475,12 @@ lsm_status lsm_score(const lsm_cli *cli, lsm_err *err) {
     lsm_mask a = {0}, b = {0};
     st = lsm_slice_read_mask(path, &ro, &a, err);
     if (st == LSM_OK) st = lsm_slice_read_mask(truth[k], &ro_truth, &b, err);
+    if (st == LSM_OK && outlines) { /* filled as reconstruct filled its inputs */
+      lsm_mask filled = {0};
+      st = lsm_outline_fill(&b, &filled, err);
+      lsm_mask_free(&b);
+      b = filled;
+    }
     if (st == LSM_OK && (a.width != b.width || a.height != b.height))
       st = lsm_fail(err, LSM_ERR_INPUT, path, "slice is %dx%d but the truth slice %s is %dx%d",
                     a.width, a.height, truth[k], b.width, b.height);
