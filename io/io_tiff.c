@@ -106,6 +106,7 @@ static void fp_unmap(thandle_t h, void *base, toff_t size) { (void)h, (void)base
 /* libtiff's options for one file: its messages to msgs, allocations capped. */
 static TIFFOpenOptions *open_options(tiff_messages *msgs) {
   msgs->first[0] = '\0';
+  msgs->decoding = 0; /* libtiff warns while it reads the directory, in TIFFOpen */
   TIFFOpenOptions *o = TIFFOpenOptionsAlloc();
   if (!o) return NULL;
   TIFFOpenOptionsSetErrorHandlerExtR(o, on_tiff_error, msgs);
