@@ -33,15 +33,26 @@
 #define TIFF_MAX_ALLOC ((tmsize_t)1 << 31)
 
 typedef struct tiff_messages {
-  char first[200]; /* the first error, or warning that means damage; "" if none */
-  int decoding;    /* set once the directory is read: pixels are being decoded */
+  char first[200];  /* the first error, or warning that means damage; "" if none */
+  int decoding;     /* set once the directory is read: pixels are being decoded */
+  const char *name; /* the file's name, which the message names already */
 } tiff_messages;
+
+/* Drops the "<name>: " that some of libtiff's messages start with. */
+static void drop_name(char *text, const char *name) {
+  const size_t n = name ? strlen(name) : 0;
+  if (n && strncmp(text, name, n) == 0 && text[n] == ':' && text[n + 1] == ' ')
+    memmove(text, text + n + 2, strlen(text + n + 2) + 1);
+}
 
 static int on_tiff_error(TIFF *tif, void *user, const char *module, const char *fmt, va_list ap) {
   (void)tif;
   (void)module;
   tiff_messages *m = user;
-  if (m && !m->first[0]) vsnprintf(m->first, sizeof m->first, fmt, ap);
+  if (m && !m->first[0]) {
+    vsnprintf(m->first, sizeof m->first, fmt, ap);
+    drop_name(m->first, m->name);
+  }
   return 1; /* handled: not to stderr */
 }
 
@@ -67,7 +78,10 @@ static int on_tiff_warning(TIFF *tif, void *user, const char *module, const char
   /* in the directory, unknown or odd tags mean nothing to a mask; a tag whose
    * data lies past the end of the file means the file was cut */
   const int damage = m->decoding ? !harmless_decode_warning(text) : strstr(text, "IO error") != NULL;
-  if (damage) memcpy(m->first, text, sizeof text);
+  if (damage) {
+    memcpy(m->first, text, sizeof text);
+    drop_name(m->first, m->name);
+  }
   return 1;
 }
 
@@ -104,9 +118,10 @@ static int fp_map(thandle_t h, void **base, toff_t *size) {
 static void fp_unmap(thandle_t h, void *base, toff_t size) { (void)h, (void)base, (void)size; }
 
 /* libtiff's options for one file: its messages to msgs, allocations capped. */
-static TIFFOpenOptions *open_options(tiff_messages *msgs) {
+static TIFFOpenOptions *open_options(tiff_messages *msgs, const char *name) {
   msgs->first[0] = '\0';
   msgs->decoding = 0; /* libtiff warns while it reads the directory, in TIFFOpen */
+  msgs->name = name;
   TIFFOpenOptions *o = TIFFOpenOptionsAlloc();
   if (!o) return NULL;
   TIFFOpenOptionsSetErrorHandlerExtR(o, on_tiff_error, msgs);
@@ -120,7 +135,7 @@ static TIFFOpenOptions *open_options(tiff_messages *msgs) {
 static lsm_status tiff_open(const char *path, FILE *fp, const char *name, tiff_messages *msgs,
                             TIFF **out, lsm_err *err) {
   *out = NULL;
-  TIFFOpenOptions *o = open_options(msgs);
+  TIFFOpenOptions *o = open_options(msgs, name);
   if (!o) return lsm_fail(err, LSM_ERR_NOMEM, name, "cannot allocate libtiff's options");
   TIFF *tif = path ? TIFFOpenExt(path, "rm", o)
                    : TIFFClientOpenExt(name, "rm", (thandle_t)fp, fp_read, fp_write, fp_seek,

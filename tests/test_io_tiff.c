@@ -211,6 +211,7 @@ static void test_tiff_layouts(void **state) {
   lsm_err_clear(&err);
   assert_int_equal(lsm_slice_read_mask(path, NULL, &m, &err), LSM_ERR_INPUT);
   assert_msg_contains(err, "garbage.tif");
+  assert_null(strstr(strstr(err.msg, "garbage.tif") + 1, "garbage.tif")); /* named once */
   char good_path[256], cut[256];
   join(good_path, sizeof good_path, f->dir, "gray8-lzw.tif");
   join(cut, sizeof cut, f->dir, "cut.tif");
