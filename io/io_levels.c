@@ -33,7 +33,9 @@ lsm_status lsm_png_count_levels(const char *path, unsigned *levels) {
     png_image_free(&image);
     return LSM_ERR_LIMIT;
   }
-  unsigned char *pixels = malloc(bytes);
+  /* zeroed: with no background given, libpng composites an alpha channel
+   * over the buffer's contents (here black, as the slice readers do) */
+  unsigned char *pixels = calloc(bytes, 1);
   if (!pixels) {
     png_image_free(&image);
     return LSM_ERR_NOMEM;

@@ -242,6 +242,37 @@ static void test_png_gray_alpha(void **state) {
   check_png(f->dir, "ga16.png", &t16, 0, want16);
 }
 
+/* The count of label values composites an alpha channel over black, as the
+ * slice readers do, not over whatever its buffer held (libpng's simplified
+ * API composites over the buffer when given no background): a white square,
+ * opaque on a transparent white page, is one level however the heap was used. */
+static void test_png_levels_alpha(void **state) {
+  tmp_fixture *f = *state;
+  enum { N = 32 };
+  static unsigned s[N * N * 2];
+  for (int y = 0; y < N; ++y)
+    for (int x = 0; x < N; ++x) {
+      s[2 * (y * N + x)] = 255;
+      s[2 * (y * N + x) + 1] = x >= 8 && x < 20 && y >= 8 && y < 20 ? 255 : 0;
+    }
+  test_png t = {.width = N, .height = N, .depth = 8, .color_type = PNG_COLOR_TYPE_GRAY_ALPHA, .samples = s};
+  char path[256];
+  join(path, sizeof path, f->dir, "levels-ga8.png");
+  write_test_png(path, &t);
+  for (int k = 0; k < 3; ++k) {
+    unsigned char *junk[8]; /* freed blocks of the size the count allocates */
+    for (int j = 0; j < 8; ++j) {
+      junk[j] = malloc(N * N);
+      assert_non_null(junk[j]);
+      memset(junk[j], 0xa5, N * N);
+    }
+    for (int j = 0; j < 8; ++j) free(junk[j]);
+    unsigned levels = 99;
+    assert_int_equal(lsm_png_count_levels(path, &levels), LSM_OK);
+    assert_int_equal(levels, 1);
+  }
+}
+
 static void test_png_rgb(void **state) {
   tmp_fixture *f = *state;
   const unsigned s[] = {
@@ -592,6 +623,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_png_gray16, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_png_gray_trns, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_png_gray_alpha, setup_tmp, teardown_tmp),
+      cmocka_unit_test_setup_teardown(test_png_levels_alpha, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_png_rgb, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_png_rgba, setup_tmp, teardown_tmp),
       cmocka_unit_test_setup_teardown(test_png_palette, setup_tmp, teardown_tmp),
