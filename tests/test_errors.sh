@@ -756,6 +756,11 @@ if grep -q -F "interrupted by SIGINT" "$TMP/stderr-gap"; then ok; else bad "long
 if [ $((t1 - t0)) -le 5 ]; then ok; else bad "long gap: took $((t1 - t0)) s to stop (the morph does not check the signal)"; fi
 if [ -e gap-out ]; then bad "long gap: an output folder was left"; else ok; fi
 
+# ---- a CFL step that underflowed names no cure that cannot help (a smaller --cfl) ----------------------------------------
+expect "zero CFL step" 1 "the CFL time step is 0" zero-cfl-out reconstruct good -o zero-cfl-out -q \
+  --pixel-size 1e20,1e-20 --per-iteration
+if grep -q -F "smaller --cfl" "$TMP/stderr"; then bad "zero CFL step: suggests a smaller --cfl"; else ok; fi
+
 # ---- a complete run replaces an earlier result as a whole ---------------------------------------------------------------
 "$LSM" reconstruct good -o long-out -q --no-slices >/dev/null 2>"$TMP/stderr"
 rc=$?

@@ -47,8 +47,10 @@ static void name_failed_pair(lsm_err *err, const lsm_slice_files *src,
   what[sizeof what - 1] = '\0';
   int n = snprintf(err->msg, sizeof err->msg, "%s -> %s (gap %zu of %zu): ", src->paths[pair],
                    lsm_base_name(src->paths[pair + 1]), pair + 1, src->count - 1);
+  /* a smaller CFL number helps a morph that blew up, not a step that underflowed to 0 */
+  const char *hint = strstr(what, "no longer finite") ? "; try a smaller --cfl" : "";
   if (n > 0 && (size_t)n < sizeof err->msg)
-    snprintf(err->msg + n, sizeof err->msg - (size_t)n, "%s; try a smaller --cfl", what);
+    snprintf(err->msg + n, sizeof err->msg - (size_t)n, "%s%s", what, hint);
 }
 
 /* A worker's transport: counts what it has sent to rank 0. */
