@@ -203,22 +203,18 @@ lsm_status lsm_labels_to_integer(lsm_label_file *f, int *converted, lsm_err *err
   double lo = 0.0, hi = 0.0;
   for (size_t k = 0; k < count; ++k) {
     const double x = lsm_voxel_get(v, k);
-    if (x == floor(x) && isfinite(x) && !(fabs(x) <= 9.0e15)) {
-      size_t at[3];
-      voxel_ijk(v, k, at);
-      return lsm_fail(err, LSM_ERR_INPUT, f->path,
-                      "not a label map: voxel (%zu, %zu, %zu) holds %.17g, past the labels a "
-                      "floating-point volume holds exactly (up to 9e15; store labels as integers)",
-                      at[0], at[1], at[2], x);
-    }
     if (!(x == floor(x)) || !(fabs(x) <= 9.0e15)) {
       size_t at[3];
       voxel_ijk(v, k, at);
+      const int whole = isfinite(x) && x == floor(x); /* whole, but too large */
       return lsm_fail(err, LSM_ERR_INPUT, f->path,
-                      "not a label map: voxel (%zu, %zu, %zu) holds %.17g, and labels are whole "
-                      "numbers (an intensity image, or labels resampled with interpolation: "
-                      "resample label maps with nearest neighbour)",
-                      at[0], at[1], at[2], x);
+                      "not a label map: voxel (%zu, %zu, %zu) holds %.17g, %s", at[0], at[1],
+                      at[2], x,
+                      whole ? "past the labels a floating-point volume holds exactly (up to "
+                              "9e15; store labels as integers)"
+                            : "and labels are whole numbers (an intensity image, or labels "
+                              "resampled with interpolation: resample label maps with nearest "
+                              "neighbour)");
     }
     lo = x < lo ? x : lo;
     hi = x > hi ? x : hi;
